@@ -1,0 +1,3 @@
+from aeroexec.cli import main
+
+main()

@@ -1,0 +1,13 @@
+"""The `aeroexec` command line (typer). Importing the command modules registers them."""
+
+from __future__ import annotations
+
+from aeroexec.cli import catalog_cmd  # noqa: F401  (registers `catalog`)
+from aeroexec.cli.app import app
+
+
+def main() -> None:
+    app()
+
+
+__all__ = ["app", "main"]
