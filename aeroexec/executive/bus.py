@@ -1,0 +1,110 @@
+"""The in-process bus: every service call and topic message of the core passes here.
+
+The thesis' components talked over ROS services and topics; here they call each other
+directly, but through `Bus.call`/`Bus.publish`, so observers (the MCAP recorder, the CLI
+printer, tests) see the same traffic a ROS graph would have carried. Requests and
+payloads may be given as zero-argument callables: with nobody observing, they are never
+built, which keeps the unrecorded path fast.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Protocol
+
+from aeroexec.executive.clock import Clock
+from aeroexec.executive.messages import ServiceCallRecord, ServiceResult, TopicRecord
+
+Payload = dict[str, Any] | Callable[[], dict[str, Any]]
+
+
+class BusObserver(Protocol):
+    def on_service_call(self, record: ServiceCallRecord) -> None: ...
+
+    def on_topic(self, record: TopicRecord) -> None: ...
+
+
+def _build(payload: Payload | None) -> dict[str, Any]:
+    if payload is None:
+        return {}
+    return payload() if callable(payload) else payload
+
+
+class Bus:
+    def __init__(self, clock: Clock) -> None:
+        self.clock = clock
+        self._observers: list[BusObserver] = []
+        self._seq = 0
+        self._stack: list[int] = []
+
+    def attach(self, observer: BusObserver) -> None:
+        self._observers.append(observer)
+
+    def detach(self, observer: BusObserver) -> None:
+        self._observers.remove(observer)
+
+    @property
+    def observed(self) -> bool:
+        return bool(self._observers)
+
+    def call(
+        self,
+        service: str,
+        caller: str,
+        handler: Callable[[], ServiceResult],
+        request: Payload | None = None,
+    ) -> ServiceResult:
+        """Run `handler` as the service `service` called by `caller`; observers see the
+        completed call (nested calls complete, and are seen, before their parent)."""
+        seq = self._seq
+        self._seq += 1
+        if not self._observers:
+            return handler()
+        parent = self._stack[-1] if self._stack else None
+        self._stack.append(seq)
+        try:
+            result = handler()
+        finally:
+            self._stack.pop()
+        record = ServiceCallRecord(
+            seq=seq,
+            parent_seq=parent,
+            caller=caller,
+            service=service,
+            request=_build(request),
+            response=result.as_dict(),
+            log_time_ns=self.clock.now_ns(),
+        )
+        for observer in self._observers:
+            observer.on_service_call(record)
+        return result
+
+    def publish(self, topic: str, data: Payload) -> None:
+        if not self._observers:
+            return
+        record = TopicRecord(topic, _build(data), self.clock.now_ns())
+        for observer in self._observers:
+            observer.on_topic(record)
+
+
+class MemoryObserver:
+    """Keeps everything it sees, in order (for tests and the CLI's summary)."""
+
+    def __init__(self) -> None:
+        self.records: list[ServiceCallRecord | TopicRecord] = []
+
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        self.records.append(record)
+
+    def on_topic(self, record: TopicRecord) -> None:
+        self.records.append(record)
+
+    def topics(self, topic: str) -> list[dict[str, Any]]:
+        return [r.data for r in self.records if isinstance(r, TopicRecord) and r.topic == topic]
+
+    def calls(self, service: str | None = None) -> list[ServiceCallRecord]:
+        return [
+            r
+            for r in self.records
+            if isinstance(r, ServiceCallRecord) and (service is None or r.service == service)
+        ]

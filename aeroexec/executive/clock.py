@@ -1,0 +1,62 @@
+"""Time for the executive: the only place the core may learn what time it is.
+
+`SimClock` makes runs reproducible (time advances only when the executive steps);
+`WallClock` is for live flights. Both count nanoseconds from the session start, which
+is what the recording uses as log time.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Protocol
+
+NS_PER_S = 1_000_000_000
+#: The thesis' "low-rate loop" for behavior run(): 10 Hz.
+DEFAULT_TICK_NS = 100_000_000
+
+
+class Clock(Protocol):
+    kind: str
+    tick_ns: int
+
+    def now_ns(self) -> int: ...
+
+    def advance(self) -> int:
+        """Move to the next tick (waiting for it on a wall clock); return the new time."""
+        ...
+
+
+class SimClock:
+    kind = "sim"
+
+    def __init__(self, tick_ns: int = DEFAULT_TICK_NS) -> None:
+        if tick_ns <= 0:
+            raise ValueError("tick must be positive")
+        self.tick_ns = tick_ns
+        self._now = 0
+
+    def now_ns(self) -> int:
+        return self._now
+
+    def advance(self) -> int:
+        self._now += self.tick_ns
+        return self._now
+
+
+class WallClock:
+    kind = "wall"
+
+    def __init__(self, tick_ns: int = DEFAULT_TICK_NS) -> None:
+        self.tick_ns = tick_ns
+        self._start = time.monotonic_ns()
+        self._next = tick_ns
+
+    def now_ns(self) -> int:
+        return time.monotonic_ns() - self._start
+
+    def advance(self) -> int:
+        delay = self._next - self.now_ns()
+        if delay > 0:
+            time.sleep(delay / NS_PER_S)
+        self._next += self.tick_ns
+        return self.now_ns()

@@ -1,0 +1,162 @@
+"""The `Executive` facade: catalog + behavior library + vehicle + clock + bus, wired.
+
+    ex = Executive(load_catalog("catalog/default.yaml"))
+    ex.activate_behavior("TAKE_OFF")
+    ex.run_until(lambda: not ex.active_behaviors, timeout_s=30)
+
+One thread, one clock: `step()` advances the clock one tick, moves the vehicle,
+refreshes the beliefs it feeds, runs every active behavior once (in catalog order) and
+publishes the vehicle state. With a `SimClock` the whole run is a pure function of the
+catalog, the code, the world, the seed and the commands.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+from aeroexec.catalog.model import Catalog
+from aeroexec.executive.behavior import Behavior, GenericBehavior
+from aeroexec.executive.beliefs import Beliefs
+from aeroexec.executive.bus import Bus, BusObserver
+from aeroexec.executive.clock import NS_PER_S, Clock, SimClock
+from aeroexec.executive.coordinator import BehaviorCoordinator
+from aeroexec.executive.messages import BehaviorEvent, ServiceResult
+from aeroexec.executive.resources import ResourceManager
+from aeroexec.executive.specialist import SPECIALIST, BehaviorSpecialist
+from aeroexec.vehicles.base import Vehicle
+
+Library = Mapping[str, type[Behavior]]
+
+
+def _default_vehicle() -> Vehicle:
+    from aeroexec.vehicles.sim import SimVehicle
+
+    return SimVehicle()
+
+
+def _default_library() -> Library:
+    from aeroexec.behaviors import STANDARD_LIBRARY
+
+    return STANDARD_LIBRARY
+
+
+class Executive:
+    def __init__(
+        self,
+        catalog: Catalog,
+        vehicle: Vehicle | None = None,
+        clock: Clock | None = None,
+        library: Library | None = None,
+        observers: Iterable[BusObserver] = (),
+        drone: str = "drone1",
+    ) -> None:
+        self.catalog = catalog
+        self.drone = drone
+        self.clock: Clock = clock or SimClock()
+        self.bus = Bus(self.clock)
+        for observer in observers:
+            self.bus.attach(observer)
+        self.vehicle: Vehicle = vehicle if vehicle is not None else _default_vehicle()
+        self.beliefs = Beliefs(self._belief_changed)
+        self.events: list[BehaviorEvent] = []
+        self._event_listeners: list[Callable[[BehaviorEvent], None]] = []
+        self.specialist = BehaviorSpecialist(catalog, self.bus)
+        self.resources = ResourceManager(catalog, self.bus, self.specialist)
+        self.behaviors: dict[str, Behavior] = {}
+        chosen = _default_library() if library is None else library
+        for name, descriptor in catalog.behaviors.items():
+            behavior = chosen.get(name, GenericBehavior)()
+            behavior.bind(self, descriptor)
+            self.behaviors[name] = behavior
+        self.coordinator = BehaviorCoordinator(self)
+        self._feed_beliefs()
+        self.initiation = self.bus.call(
+            "initiate_behaviors",
+            "executive",
+            lambda: self.resources.initiate_resources(SPECIALIST),
+        )
+
+    # -- the services a mission (or an operator) uses ------------------------------------
+    def activate_behavior(
+        self, name: str, arguments: Mapping[str, Any] | None = None, caller: str = "mission"
+    ) -> ServiceResult:
+        return self.coordinator.activate_behavior(name, arguments, caller)
+
+    def inhibit_behavior(self, name: str, caller: str = "mission") -> ServiceResult:
+        return self.coordinator.inhibit_behavior(name, caller)
+
+    # -- state ---------------------------------------------------------------------------
+    @property
+    def active_behaviors(self) -> tuple[str, ...]:
+        return self.coordinator.active_names
+
+    @property
+    def capability_references(self) -> dict[str, int]:
+        return dict(self.resources.references)
+
+    @property
+    def running_processes(self) -> tuple[str, ...]:
+        return self.resources.running_processes
+
+    @property
+    def now_s(self) -> float:
+        return self.clock.now_ns() / NS_PER_S
+
+    # -- time ----------------------------------------------------------------------------
+    def step(self) -> None:
+        self.clock.advance()
+        self.vehicle.step(self.clock.tick_ns / NS_PER_S)
+        self._feed_beliefs()
+        for behavior in [self.coordinator.active[n] for n in self.active_behaviors]:
+            behavior.tick()
+        if self.bus.observed:
+            self.bus.publish("vehicle/state", self._vehicle_state)
+
+    def run_until(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
+        """Step until `predicate()` holds (True) or `timeout_s` of clock time pass (False)."""
+        deadline = self.clock.now_ns() + round(timeout_s * NS_PER_S)
+        while not predicate():
+            if self.clock.now_ns() >= deadline:
+                return False
+            self.step()
+        return True
+
+    def run_for(self, seconds: float) -> None:
+        deadline = self.clock.now_ns() + round(seconds * NS_PER_S)
+        while self.clock.now_ns() < deadline:
+            self.step()
+
+    # -- plumbing ------------------------------------------------------------------------
+    def add_event_listener(self, listener: Callable[[BehaviorEvent], None]) -> None:
+        self._event_listeners.append(listener)
+
+    def on_behavior_event(self, event: BehaviorEvent) -> None:
+        self.events.append(event)
+        self.bus.publish("behavior_event", event.as_dict)
+        self.coordinator.on_behavior_event(event)
+        for listener in self._event_listeners:
+            listener(event)
+
+    def log(self, message: str, level: str = "INFO", name: str = "executive") -> None:
+        self.bus.publish("log", lambda: {"level": level, "name": name, "message": message})
+
+    def _belief_changed(self, op: str, belief: str) -> None:
+        self.bus.publish("beliefs", lambda: {"op": op, "belief": belief})
+
+    def _feed_beliefs(self) -> None:
+        from aeroexec.vehicles.beliefs_feed import update_beliefs
+
+        update_beliefs(self.beliefs, self.vehicle.state(), self.vehicle.visible_markers())
+
+    def _vehicle_state(self) -> dict[str, Any]:
+        state = self.vehicle.state()
+        return {
+            "position": list(state.position),
+            "velocity": list(state.velocity),
+            "yaw": state.yaw,
+            "battery": state.battery,
+            "flying": state.flying,
+            "armed": state.armed,
+            "fault": state.fault,
+        }

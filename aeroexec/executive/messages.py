@@ -1,0 +1,88 @@
+"""Values that cross the bus: service results, events, and what observers receive."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+
+class EventCode(str, Enum):
+    """`droneMsgsROS/BehaviorEvent` codes (2017) plus PROCESS_FAILURE (Aerostack 2019+)."""
+
+    GOAL_ACHIEVED = "GOAL_ACHIEVED"
+    TIME_OUT = "TIME_OUT"
+    WRONG_PROGRESS = "WRONG_PROGRESS"
+    ASSUMPTION_CONFLICT = "ASSUMPTION_CONFLICT"
+    INTERRUPTED = "INTERRUPTED"
+    PROCESS_FAILURE = "PROCESS_FAILURE"
+
+
+@dataclass(frozen=True, slots=True)
+class ServiceResult:
+    """Every service answers `(ok, error, payload)`: errors are data, not exceptions."""
+
+    ok: bool
+    error: str = ""
+    payload: dict[str, Any] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"ok": self.ok, "error": self.error, **self.payload}
+
+
+OK = ServiceResult(True)
+
+
+def failure(error: str, **payload: Any) -> ServiceResult:
+    return ServiceResult(False, error, payload)
+
+
+@dataclass(frozen=True, slots=True)
+class BehaviorEvent:
+    """A behavior's one end event: which activation (`uid`) ended, how, and when."""
+
+    name: str
+    uid: int
+    code: EventCode
+    time_ns: int
+    detail: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "uid": self.uid,
+            "code": self.code.value,
+            "detail": self.detail,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class ServiceCallRecord:
+    """A completed service call as observers see it (and the recorder writes it)."""
+
+    seq: int
+    parent_seq: int | None
+    caller: str
+    service: str
+    request: dict[str, Any]
+    response: dict[str, Any]
+    log_time_ns: int
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "seq": self.seq,
+            "parent_seq": self.parent_seq,
+            "caller": self.caller,
+            "service": self.service,
+            "request": self.request,
+            "response": self.response,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class TopicRecord:
+    """A message published on a topic."""
+
+    topic: str
+    data: dict[str, Any]
+    log_time_ns: int
