@@ -1,11 +1,15 @@
 """YAML to plain values that remember where they came from.
 
-PyYAML composes the document into nodes (with the C parser when it is built in); we
-turn nodes into `YNode`s ourselves instead of letting a constructor run, so that:
+PyYAML parses the text into events (with the C parser when it is built in); we build
+`YNode`s from the events ourselves instead of letting PyYAML's composer and constructor
+run, so that:
 
 * no YAML tag is ever executed (only the core schema's tags are accepted);
 * aliases are followed under a budget, so an alias bomb fails fast instead of
   expanding a billion nodes, and recursive aliases are refused;
+* nesting is handled with an explicit stack: PyYAML's C composer recurses in C and
+  crashes the interpreter (SIGSEGV) on ~100,000 nested brackets, its Python composer
+  raises RecursionError at ~1,000;
 * every value keeps its `file:line:col`, and every mapping key its own mark.
 """
 
@@ -28,9 +32,16 @@ HAS_C_LOADER = _Loader is not yaml.SafeLoader
 
 _CORE = "tag:yaml.org,2002:"
 _SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
+_SEQ_TAG = _CORE + "seq"
+_MAP_TAG = _CORE + "map"
+_MERGE_TAG = _CORE + "merge"
 #: Nodes visited per document, aliases counted each time they are followed. Large enough
-#: for a 100,000-entry catalog, small enough that a "billion laughs" stops in milliseconds.
+#: for a 100,000-entry catalog, small enough that a "billion laughs" stops in milliseconds
+#: (an alias costs the size of what it names, computed once, not a walk of it).
 DEFAULT_NODE_BUDGET = 5_000_000
+#: A catalog is 6 levels deep; the limit keeps recursive consumers of `YNode`
+#: (`plain()`, `==`) far from Python's recursion limit.
+MAX_DEPTH = 200
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,96 +76,216 @@ class YNode:
         return self.value
 
 
-def _mark(file: str, node: yaml.Node) -> Mark:
-    return Mark(file, node.start_mark.line + 1, node.start_mark.column + 1)
+def _mark(file: str, mark: Any) -> Mark:
+    return Mark(file, mark.line + 1, mark.column + 1)
+
+
+class _Open:
+    """A sequence or mapping whose end event has not arrived yet."""
+
+    __slots__ = ("anchor", "duplicates", "items", "key", "key_marks", "mark", "size")
+
+    def __init__(self, mark: Mark, anchor: str | None, mapping: bool) -> None:
+        self.mark = mark
+        self.anchor = anchor
+        self.size = 1
+        self.items: dict[str, YNode] | list[YNode] = {} if mapping else []
+        self.key_marks: dict[str, Mark] = {}
+        self.duplicates: list[tuple[str, Mark]] = []
+        self.key: YNode | None = None  # a mapping's key, waiting for its value
+
+    def add(self, node: YNode, size: int) -> None:
+        self.size += size
+        if isinstance(self.items, list):
+            self.items.append(node)
+            return
+        if self.key is None:
+            if isinstance(node.value, (dict, list)):
+                raise CatalogError("a mapping key must be a scalar", node.mark)
+            self.key = node
+            return
+        name = str(self.key.value)
+        if name in self.items:
+            self.duplicates.append((name, self.key.mark))
+        self.items[name] = node
+        self.key_marks[name] = self.key.mark
+        self.key = None
+
+    def close(self) -> YNode:
+        if isinstance(self.items, list):
+            return YNode(self.items, self.mark)
+        return YNode(self.items, self.mark, self.key_marks, tuple(self.duplicates))
 
 
 class _Builder:
-    def __init__(self, file: str, budget: int) -> None:
+    def __init__(self, loader: Any, file: str, budget: int) -> None:
+        self.loader = loader
         self.file = file
         self.budget = budget
         self.constructor = yaml.constructor.SafeConstructor()
-        self.in_progress: set[int] = set()
+        self.anchors: dict[str, tuple[YNode, int]] = {}
+        self.open_anchors: set[str] = set()
+        # Catalogs repeat the same few scalars ("no", "15", list names) thousands of times.
+        self.scalars: dict[tuple[Any, ...], Any] = {}
 
-    def build(self, node: yaml.Node) -> YNode:
-        self.budget -= 1
+    def spend(self, cost: int, mark: Mark) -> None:
+        self.budget -= cost
         if self.budget < 0:
             raise CatalogError(
-                "document expands to too many nodes (alias bomb?); refusing to expand it",
-                _mark(self.file, node),
-            )
-        if isinstance(node, yaml.ScalarNode):
-            return self._scalar(node)
-        if id(node) in self.in_progress:
-            raise CatalogError("recursive alias: a node contains itself", _mark(self.file, node))
-        self.in_progress.add(id(node))
-        try:
-            if isinstance(node, yaml.SequenceNode):
-                self._check_tag(node, _CORE + "seq")
-                return YNode([self.build(item) for item in node.value], _mark(self.file, node))
-            if isinstance(node, yaml.MappingNode):
-                return self._mapping(node)
-        finally:
-            self.in_progress.discard(id(node))
-        raise CatalogError(f"unsupported YAML node {type(node).__name__}", _mark(self.file, node))
-
-    def _check_tag(self, node: yaml.Node, expected: str) -> None:
-        if node.tag != expected:
-            raise CatalogError(
-                f"YAML tag {node.tag!r} is not allowed (aeroexec never executes tags)",
-                _mark(self.file, node),
+                "document expands to too many nodes (alias bomb?); refusing to expand it", mark
             )
 
-    def _scalar(self, node: yaml.ScalarNode) -> YNode:
-        if node.tag not in _SCALAR_TAGS:
-            self._check_tag(node, _CORE + "str")
-        try:
-            value = self.constructor.construct_object(node, deep=True)
-        except (yaml.constructor.ConstructorError, ValueError, OverflowError) as exc:
+    def document(self) -> YNode | None:
+        loader = self.loader
+        loader.get_event()  # StreamStartEvent
+        if loader.check_event(yaml.StreamEndEvent):
+            return None
+        loader.get_event()  # DocumentStartEvent
+        root = self.node()
+        loader.get_event()  # DocumentEndEvent
+        if not loader.check_event(yaml.StreamEndEvent):
             raise CatalogError(
-                f"bad scalar {node.value!r}: {exc}", _mark(self.file, node)
-            ) from None
-        return YNode(value, _mark(self.file, node))
+                "invalid YAML: expected a single document, but found another document",
+                _mark(self.file, loader.peek_event().start_mark),
+            )
+        return root
 
-    def _mapping(self, node: yaml.MappingNode) -> YNode:
-        self._check_tag(node, _CORE + "map")
-        values: dict[str, YNode] = {}
-        key_marks: dict[str, Mark] = {}
-        duplicates: list[tuple[str, Mark]] = []
-        for key_node, value_node in node.value:
-            if key_node.tag == _CORE + "merge":
-                raise CatalogError(
-                    "YAML merge keys ('<<') are not supported", _mark(self.file, key_node)
-                )
-            key = self.build(key_node)
-            if isinstance(key.value, (dict, list)):
-                raise CatalogError("a mapping key must be a scalar", key.mark)
-            name = str(key.value)
-            if name in values:
-                duplicates.append((name, key.mark))
-            values[name] = self.build(value_node)
-            key_marks[name] = key.mark
-        return YNode(values, _mark(self.file, node), key_marks, tuple(duplicates))
+    def node(self) -> YNode:
+        """Build the next node from the events, without recursion."""
+        loader = self.loader
+        stack: list[_Open] = []
+        while True:
+            event = loader.get_event()
+            done: tuple[YNode, int] | None = None
+            if isinstance(event, yaml.AliasEvent):
+                done = self.alias(event)
+                self.spend(done[1], _mark(self.file, event.start_mark))
+            elif isinstance(event, yaml.ScalarEvent):
+                mark = _mark(self.file, event.start_mark)
+                self.spend(1, mark)
+                done = (YNode(self.scalar(event, mark), mark), 1)
+                self.remember(event.anchor, done)
+            elif isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+                mapping = isinstance(event, yaml.MappingStartEvent)
+                mark = _mark(self.file, event.start_mark)
+                self.spend(1, mark)
+                self.collection_tag(event, mapping, mark)
+                if stack and stack[-1].key is None and isinstance(stack[-1].items, dict):
+                    raise CatalogError("a mapping key must be a scalar", mark)
+                if len(stack) >= MAX_DEPTH:
+                    raise CatalogError(f"nested more than {MAX_DEPTH} levels deep", mark)
+                self.check_anchor(event.anchor, mark)
+                if event.anchor is not None:
+                    self.open_anchors.add(event.anchor)
+                stack.append(_Open(mark, event.anchor, mapping))
+                continue
+            else:  # SequenceEndEvent / MappingEndEvent
+                closed = stack.pop()
+                done = (closed.close(), closed.size)
+                if closed.anchor is not None:
+                    self.open_anchors.discard(closed.anchor)
+                    self.remember(closed.anchor, done)
+            if not stack:
+                return done[0]
+            stack[-1].add(*done)
+
+    def alias(self, event: Any) -> tuple[YNode, int]:
+        mark = _mark(self.file, event.start_mark)
+        if event.anchor in self.open_anchors:
+            raise CatalogError("recursive alias: a node contains itself", mark)
+        found = self.anchors.get(event.anchor)
+        if found is None:
+            raise CatalogError(f"invalid YAML: found undefined alias {event.anchor!r}", mark)
+        return found
+
+    def check_anchor(self, anchor: str | None, mark: Mark) -> None:
+        # PyYAML's composer refuses a redefined anchor too; keep its behavior.
+        if anchor is not None and (anchor in self.anchors or anchor in self.open_anchors):
+            raise CatalogError(f"invalid YAML: found duplicate anchor {anchor!r}", mark)
+
+    def remember(self, anchor: str | None, built: tuple[YNode, int]) -> None:
+        if anchor is not None:
+            self.check_anchor(anchor, built[0].mark)
+            self.anchors[anchor] = built
+
+    def collection_tag(self, event: Any, mapping: bool, mark: Mark) -> None:
+        kind = yaml.MappingNode if mapping else yaml.SequenceNode
+        tag = event.tag
+        if tag is None or tag == "!":
+            tag = self.loader.resolve(kind, None, event.implicit)
+        if tag != (_MAP_TAG if mapping else _SEQ_TAG):
+            raise self.refused(tag, mark)
+
+    def refused(self, tag: str, mark: Mark) -> CatalogError:
+        return CatalogError(f"YAML tag {tag!r} is not allowed (aeroexec never executes tags)", mark)
+
+    def scalar(self, event: Any, mark: Mark) -> Any:
+        key = (event.tag, event.value, event.implicit)
+        if key in self.scalars:
+            return self.scalars[key]
+        tag = event.tag
+        if tag is None or tag == "!":
+            tag = self.loader.resolve(yaml.ScalarNode, event.value, event.implicit)
+        if tag == _MERGE_TAG:
+            raise CatalogError("YAML merge keys ('<<') are not supported", mark)
+        if tag not in _SCALAR_TAGS:
+            raise self.refused(tag, mark)
+        node = yaml.ScalarNode(tag, event.value, event.start_mark, event.end_mark)
+        try:
+            # Call the tag's constructor directly: `construct_object` would keep every
+            # node in its memo for the document's lifetime.
+            value = self.constructor.yaml_constructors[tag](self.constructor, node)
+        except (yaml.YAMLError, ValueError, OverflowError, KeyError) as exc:
+            # KeyError: `!!bool xyz`; ValueError: `!!int xyz`, or an int of 5,000 digits.
+            problem = "not a boolean" if isinstance(exc, KeyError) else " ".join(str(exc).split())
+            raise CatalogError(f"bad scalar {_short(event.value)}: {problem}", mark) from None
+        self.scalars[key] = value
+        return value
+
+
+def _short(value: str, limit: int = 40) -> str:
+    return repr(value if len(value) <= limit else value[:limit] + "...")
+
+
+def _offset_mark(file: str, text: str, offset: int) -> Mark:
+    line = text.count("\n", 0, offset) + 1
+    return Mark(file, line, offset - (text.rfind("\n", 0, offset) + 1) + 1)
+
+
+def _reader_error(exc: yaml.reader.ReaderError, text: str, file: str) -> CatalogError:
+    position = exc.position
+    c_parser = getattr(yaml, "CParser", None)
+    if c_parser is not None and issubclass(_Loader, c_parser):
+        # libyaml counts bytes of the UTF-8 encoding, Python's reader counts characters.
+        position = len(text.encode("utf-8")[:position].decode("utf-8", "ignore"))
+    character = exc.character
+    shown = f"#x{character:04x}" if isinstance(character, int) else repr(character)
+    return CatalogError(
+        f"invalid YAML: unacceptable character {shown}: {exc.reason}",
+        _offset_mark(file, text, position),
+    )
 
 
 def load_yaml(text: str, file: str, *, budget: int = DEFAULT_NODE_BUDGET) -> YNode | None:
     """Parse one YAML document into `YNode`s; `None` for an empty document.
 
     Raises `CatalogError` (with `file:line:col`) for syntax errors, several documents,
-    disallowed tags, alias bombs and recursive aliases.
+    disallowed tags, alias bombs, recursive aliases and too deep nesting.
     """
-    loader = _Loader(text)
+    loader = None
     try:
-        node = loader.get_single_node()
+        loader = _Loader(text)  # the pure-Python reader checks characters here already
+        return _Builder(loader, file, budget).document()
+    except yaml.reader.ReaderError as exc:
+        raise _reader_error(exc, text, file) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = Mark(file, mark.line + 1, mark.column + 1) if mark else Mark(file)
-        problem = exc.problem or exc.context or "invalid YAML"
+        problem = " ".join((exc.problem or exc.context or "invalid YAML").split())
         raise CatalogError(f"invalid YAML: {problem}", where) from None
     except yaml.YAMLError as exc:
-        raise CatalogError(f"invalid YAML: {exc}", Mark(file, 1, 1)) from None
+        problem = " ".join(str(exc).split())
+        raise CatalogError(f"invalid YAML: {problem}", Mark(file, 1, 1)) from None
     finally:
-        loader.dispose()
-    if node is None:
-        return None
-    return _Builder(file, budget).build(node)
+        if loader is not None:
+            loader.dispose()
