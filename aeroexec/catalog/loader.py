@@ -10,6 +10,7 @@ format) raises from `read_catalog`.
 from __future__ import annotations
 
 import difflib
+import math
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -85,9 +86,17 @@ def read_catalog_text(path: str | Path) -> tuple[str, str]:
     try:
         return p.read_text(encoding="utf-8"), file
     except UnicodeDecodeError as exc:
-        raise CatalogError(f"not UTF-8 text (byte {exc.start})", Mark(file)) from None
+        raise CatalogError(f"not UTF-8 text (byte {exc.start})", _byte_mark(file, exc)) from None
     except OSError as exc:
         raise CatalogError(f"cannot read: {exc.strerror}", Mark(file)) from None
+
+
+def _byte_mark(file: str, exc: UnicodeDecodeError) -> Mark:
+    """Line and column (in characters) of the first byte that is not UTF-8."""
+    data = bytes(exc.object)
+    start = data.rfind(b"\n", 0, exc.start) + 1
+    column = len(data[start : exc.start].decode("utf-8", "replace")) + 1
+    return Mark(file, data.count(b"\n", 0, exc.start) + 1, column)
 
 
 def read_catalog(path: str | Path) -> Catalog:
@@ -192,6 +201,19 @@ class _CatalogReader:
                 *subjects,
             )
 
+    def dependency(self, node: YNode, tag: str, owner: str, *subjects: str) -> YNode | None:
+        """A dependency tag's value; the thesis says an absent one gets an info message."""
+        value = node.get(tag)
+        if value is None and tag not in node.value:
+            self.report(
+                codes.MISSING_DEPENDENCY_TAG,
+                Severity.INFO,
+                f"{owner}: no {tag}; none is assumed",
+                node.mark,
+                *subjects,
+            )
+        return value
+
     def tag(self, node: YNode, name: str) -> YNode | None:
         """The value of `name`, or of its accepted alias spelling."""
         found = node.get(name)
@@ -243,9 +265,9 @@ class _CatalogReader:
         return None
 
     def seconds(self, node: YNode, what: str, *subjects: str) -> float | None:
-        value = node.value
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0:
-            return float(value)
+        value = _as_float(node.value)
+        if value is not None and value > 0:
+            return value
         self.error(
             codes.WRONG_TYPE,
             f"{what} must be a positive number of seconds, got {_kind(node)}",
@@ -424,12 +446,18 @@ class _CatalogReader:
                     node.mark,
                     name,
                 )
-        lists = self.names(node.get("incompatible_lists"), f"{name}: incompatible_lists", name)
-        caps = self.names(node.get("capabilities"), f"{name}: capabilities", name)
+        lists = self.names(
+            self.dependency(node, "incompatible_lists", name, name),
+            f"{name}: incompatible_lists",
+            name,
+        )
+        caps = self.names(
+            self.dependency(node, "capabilities", name, name), f"{name}: capabilities", name
+        )
         for key, refs in (("incompatible_lists", lists), ("capabilities", caps)):
             for i, (_, mark) in enumerate(refs):
                 marks[f"{key}.{i}"] = mark
-        arguments = self._arguments(node.get("arguments"), name, marks)
+        arguments = self._arguments(self.dependency(node, "arguments", name, name), name, marks)
         return BehaviorDescriptor(
             name=name,
             timeout=timeout,
@@ -521,7 +549,9 @@ class _CatalogReader:
                 return malformed(
                     f"a numeric range is [min, max], got {len(values)} numbers", allowed.mark
                 )
-            low, high = float(values[0]), float(values[1])
+            low, high = _as_float(values[0]), _as_float(values[1])
+            if low is None or high is None:
+                return malformed("a range bound is NaN or too large for a float", allowed.mark)
             if low > high:
                 return malformed(
                     f"empty range [{values[0]}, {values[1]}] (min > max)", allowed.mark
@@ -576,7 +606,7 @@ class _CatalogReader:
         processes = self.names(processes_node, f"capability {name}: processes", name)
         default = self._active_by_default(node, name)
         conflicts = self.names(
-            node.get("incompatible_capabilities"),
+            self.dependency(node, "incompatible_capabilities", f"capability {name}", name),
             f"capability {name}: incompatible_capabilities",
             name,
         )
@@ -620,3 +650,15 @@ class _CatalogReader:
 
 def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _as_float(value: Any) -> float | None:
+    """A YAML number as a float; None for non-numbers, NaN (it compares false with
+    everything, so every value would be "outside") and ints beyond float range."""
+    if not _is_number(value):
+        return None
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return None if math.isnan(number) else number
