@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from aeroexec.cli import catalog_cmd  # noqa: F401  (registers `catalog`)
+from aeroexec.cli import run_cmd  # noqa: F401  (registers `run`)
 from aeroexec.cli.app import app
 
 

@@ -1,0 +1,95 @@
+"""`aeroexec run MISSION`: run a mission script against the simulated vehicle."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from aeroexec.catalog.paths import DEFAULT_CATALOG
+from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.tables import print_table
+from aeroexec.mission.activity import Activation, ActivityLog, format_arguments
+from aeroexec.mission.session import SessionConfig, SessionResult, simulate
+
+
+def _print_row(row: Activation) -> None:
+    args = format_arguments(row.arguments)
+    if not row.accepted:
+        typer.echo(f"[{row.start_s:7.1f} s] REJECTED {row.behavior} {args}: {row.error}")
+    elif row.end_ns is None:
+        typer.echo(f"[{row.start_s:7.1f} s] start    {row.behavior} {args}".rstrip())
+    else:
+        took = (row.end_s or 0.0) - row.start_s
+        detail = f" ({row.detail})" if row.detail and row.end_code != "GOAL_ACHIEVED" else ""
+        typer.echo(
+            f"[{row.end_s:7.1f} s] end      {row.behavior} {row.end_code} "
+            f"after {took:.1f} s{detail}"
+        )
+
+
+def print_summary(result: SessionResult) -> None:
+    rows = [
+        [
+            str(i),
+            a.behavior,
+            format_arguments(a.arguments),
+            a.result,
+            f"{a.start_s:.1f}",
+            "" if a.end_s is None else f"{a.end_s:.1f}",
+            "" if a.end_s is None else f"{a.end_s - a.start_s:.1f}",
+        ]
+        for i, a in enumerate(result.activations, 1)
+    ]
+    print_table(
+        "Behaviors",
+        ["#", "behavior", "arguments", "result", "start s", "end s", "took s"],
+        rows,
+    )
+    achieved = sum(a.end_code == "GOAL_ACHIEVED" for a in result.activations)
+    rejected = sum(not a.accepted for a in result.activations)
+    x, y, z = result.final_state.position
+    state = "flying" if result.final_state.flying else "landed"
+    typer.echo(
+        f"{len(result.activations)} activations: {achieved} GOAL_ACHIEVED, {rejected} rejected; "
+        f"{result.duration_s:.1f} s simulated; vehicle {state} at ({x:.2f}, {y:.2f}, {z:.2f})"
+    )
+
+
+@app.command()
+@guarded
+def run(
+    mission: Path = typer.Argument(..., help="Mission script (Python, defines runMission())."),
+    catalog: Path = typer.Option(
+        DEFAULT_CATALOG, "--catalog", "-c", help="Behavior catalog (YAML)."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed for the simulator's random failures."),
+    world: Path | None = typer.Option(
+        None, "--world", help="World file (markers, failures); default: built-in world."
+    ),
+    record: Path | None = typer.Option(
+        None, "--record", "-r", help="Record the session to this MCAP file."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the summary."),
+    debug: bool = typer.Option(False, "--debug", help="Show the traceback if the mission raises."),
+) -> None:
+    """Run MISSION in simulation: print each behavior as it starts and ends, then a summary.
+
+    Example:
+
+        aeroexec run missions/appendix_c.py --record flight.mcap
+
+    Exit code 0 when the mission function returned, 1 when it raised, 2 when an input
+    (mission, catalog, world) could not be read.
+    """
+    config = SessionConfig(mission=mission, catalog=catalog, seed=seed, world=world, record=record)
+    printer = [] if quiet else [ActivityLog(on_change=_print_row)]
+    result = simulate(config, observers=printer)
+    print_summary(result)
+    if result.recording:
+        typer.echo(f"recorded to {result.recording}")
+    if not result.outcome.returned:
+        if debug and result.outcome.traceback:
+            typer.echo(result.outcome.traceback, err=True)
+        error_line(f"mission failed: {result.outcome.error}")
+        raise typer.Exit(1)

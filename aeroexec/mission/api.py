@@ -1,0 +1,134 @@
+"""The mission API: what a mission script calls, bound to one executive.
+
+The functions of Aerostack's `executive_engine_api` (2017), in snake_case and in the
+thesis' camelCase, so the thesis' Appendix C mission runs unchanged but for its
+Python 2 prints:
+
+* `execute_behavior(name, **args)`: activate, then advance the executive until that
+  activation's event; returns the event code as a string ("GOAL_ACHIEVED", ...), or
+  "ERROR" when the activation was refused (as Aerostack's API did; `last_error()` says
+  why). Executing a recurrent behavior is refused at once: it would never return.
+* `activate_behavior(name, **args)` -> bool: activate and return at once.
+* `inhibit_behavior(name)` -> bool.
+* `consult_belief(query)` -> (bool, {var: value}); `true_belief(query)` -> bool;
+  `add_belief(belief)`, `remove_belief(belief)` -> bool.
+
+Every call is published on `mission/command` first: those are the session's external
+inputs, which replay feeds back.
+"""
+
+from __future__ import annotations
+
+import types
+from typing import Any
+
+from aeroexec.errors import MissionError
+from aeroexec.executive.beliefs import BeliefSyntaxError
+from aeroexec.executive.clock import NS_PER_S
+from aeroexec.executive.executive import Executive
+from aeroexec.executive.messages import BehaviorEvent
+
+MODULE_NAME = "executive_engine_api"
+REFUSED = "ERROR"
+#: How long `execute_behavior` waits for a behavior with no timeout (clock seconds).
+DEFAULT_WAIT_S = 3600.0
+
+
+class MissionAPI:
+    def __init__(self, executive: Executive, max_wait_s: float = DEFAULT_WAIT_S) -> None:
+        self.executive = executive
+        self.max_wait_s = max_wait_s
+        self._last_error = ""
+        self._ended: dict[int, BehaviorEvent] = {}
+        executive.add_event_listener(self._on_event)
+
+    def _on_event(self, event: BehaviorEvent) -> None:
+        self._ended[event.uid] = event
+
+    def _command(self, command: str, **fields: Any) -> None:
+        self.executive.bus.publish("mission/command", {"command": command, **fields})
+
+    # -- behaviors -----------------------------------------------------------------------
+    def execute_behavior(self, name: str, **arguments: Any) -> str:
+        self._command("execute_behavior", behavior=name, arguments=arguments)
+        descriptor = self.executive.catalog.behaviors.get(name)
+        if descriptor is not None and descriptor.recurrent:
+            raise MissionError(
+                f"execute_behavior('{name}'): {name} is recurrent and would never return; "
+                "use activate_behavior and inhibit_behavior"
+            )
+        result = self.executive.activate_behavior(name, arguments)
+        if not result.ok:
+            self._last_error = result.error
+            return REFUSED
+        uid = result.payload["uid"]
+        timeout = descriptor.timeout if descriptor and descriptor.timeout else self.max_wait_s
+        # The behavior's own timeout ends it first; the margin only guards against a
+        # behavior that ignores it.
+        finished = self.executive.run_until(lambda: uid in self._ended, timeout + 1.0)
+        if not finished:
+            raise MissionError(
+                f"execute_behavior('{name}'): no event after {timeout + 1.0:g} s "
+                f"(clock at {self.executive.clock.now_ns() / NS_PER_S:.1f} s)"
+            )
+        self._last_error = ""
+        return self._ended.pop(uid).code.value
+
+    def activate_behavior(self, name: str, **arguments: Any) -> bool:
+        self._command("activate_behavior", behavior=name, arguments=arguments)
+        result = self.executive.activate_behavior(name, arguments)
+        self._last_error = result.error
+        return result.ok
+
+    def inhibit_behavior(self, name: str) -> bool:
+        self._command("inhibit_behavior", behavior=name)
+        result = self.executive.inhibit_behavior(name)
+        self._last_error = result.error
+        return result.ok
+
+    def last_error(self) -> str:
+        """Why the last behavior command was refused ('' when it was not)."""
+        return self._last_error
+
+    # -- beliefs -------------------------------------------------------------------------
+    def consult_belief(self, query: str) -> tuple[bool, dict[str, Any]]:
+        self._command("consult_belief", query=query)
+        try:
+            return self.executive.beliefs.query(query)
+        except BeliefSyntaxError as exc:
+            raise MissionError(f"consult_belief: {exc.message}") from None
+
+    def true_belief(self, query: str) -> bool:
+        return self.consult_belief(query)[0]
+
+    def add_belief(self, belief: str) -> bool:
+        self._command("add_belief", belief=belief)
+        try:
+            return self.executive.beliefs.add(belief)
+        except BeliefSyntaxError as exc:
+            raise MissionError(f"add_belief: {exc.message}") from None
+
+    def remove_belief(self, belief: str) -> bool:
+        self._command("remove_belief", belief=belief)
+        try:
+            return self.executive.beliefs.remove(belief)
+        except BeliefSyntaxError as exc:
+            raise MissionError(f"remove_belief: {exc.message}") from None
+
+    # The thesis' spelling.
+    executeBehavior = execute_behavior
+    activateBehavior = activate_behavior
+    inhibitBehavior = inhibit_behavior
+    consultBelief = consult_belief
+    trueBelief = true_belief
+    addBelief = add_belief
+    removeBelief = remove_belief
+    lastError = last_error
+
+    def as_module(self) -> types.ModuleType:
+        """A module object a script can `import executive_engine_api as api`."""
+        module = types.ModuleType(MODULE_NAME, "aeroexec mission API bound to one executive")
+        for name in dir(self):
+            if not name.startswith("_") and name not in ("executive", "max_wait_s", "as_module"):
+                setattr(module, name, getattr(self, name))
+        return module
