@@ -254,8 +254,7 @@ def _offset_mark(file: str, text: str, offset: int) -> Mark:
 
 def _reader_error(exc: yaml.reader.ReaderError, text: str, file: str) -> CatalogError:
     position = exc.position
-    c_parser = getattr(yaml, "CParser", None)
-    if c_parser is not None and issubclass(_Loader, c_parser):
+    if not issubclass(_Loader, yaml.reader.Reader):
         # libyaml counts bytes of the UTF-8 encoding, Python's reader counts characters.
         position = len(text.encode("utf-8")[:position].decode("utf-8", "ignore"))
     character = exc.character
