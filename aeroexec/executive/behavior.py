@@ -137,6 +137,11 @@ class Behavior:
             verdict = self.check_situation(self._host.beliefs)
         except Exception as exc:  # an author bug must not escape into the core
             return failure(f"{self.behavior_name}: check_situation failed: {_describe(exc)}")
+        if not isinstance(verdict, Situation):  # so is a wrong return type
+            return failure(
+                f"{self.behavior_name}: check_situation returned "
+                f"{type(verdict).__name__}, not a Situation"
+            )
         if verdict.ok:
             return OK
         return failure(f"{self.behavior_name}: {verdict.reason}")
@@ -178,9 +183,25 @@ class Behavior:
             self.finish(EventCode.PROCESS_FAILURE, f"on_run failed: {_describe(exc)}")
             return
         if outcome is not None:
-            self.finish(outcome.code, outcome.detail)
+            self._finish_with(outcome)
         elif self._deadline_ns is not None and self._host.clock.now_ns() >= self._deadline_ns:
             self.finish(EventCode.TIME_OUT, f"no result within {self.descriptor.timeout:g} s")
+
+    def _finish_with(self, outcome: object) -> None:
+        """End with what on_run returned; a wrong type or an unknown code is an author
+        bug, reported as PROCESS_FAILURE rather than raised into the core."""
+        if not isinstance(outcome, Finished):
+            kind = type(outcome).__name__
+            self.finish(EventCode.PROCESS_FAILURE, f"on_run returned {kind}, not Finished")
+            return
+        try:
+            code = EventCode(outcome.code)
+        except (ValueError, TypeError):
+            self.finish(
+                EventCode.PROCESS_FAILURE, f"on_run finished with unknown code {outcome.code!r}"
+            )
+            return
+        self.finish(code, str(outcome.detail))
 
     def finish(self, code: EventCode, detail: str = "") -> BehaviorEvent | None:
         """Stop (Algorithm 3.4) and publish the activation's one event. Idempotent."""
