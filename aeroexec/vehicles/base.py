@@ -9,8 +9,14 @@ that into a `PROCESS_FAILURE` event.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
+
+Vec3 = tuple[float, float, float]
+
+#: The flip directions a vehicle accepts (the catalog's FLIP DIRECTION values).
+FLIP_DIRECTIONS = ("BACK", "FRONT", "LEFT", "RIGHT")
 
 
 class VehicleCommandError(RuntimeError):
@@ -19,14 +25,16 @@ class VehicleCommandError(RuntimeError):
 
 @dataclass(frozen=True, slots=True)
 class VehicleState:
-    position: tuple[float, float, float]
-    velocity: tuple[float, float, float]
+    position: Vec3
+    velocity: Vec3
     yaw: float
     battery: float  # remaining charge, 0.0 .. 1.0
     flying: bool
     armed: bool
     #: A fault the vehicle reports ("stuck_motor", "link_lost", ...), or "" when healthy.
     fault: str = ""
+    #: A scripted maneuver in progress ("flip"), or "" when the vehicle follows setpoints.
+    maneuver: str = ""
 
     @property
     def speed(self) -> float:
@@ -36,6 +44,10 @@ class VehicleState:
     @property
     def altitude(self) -> float:
         return self.position[2]
+
+    @property
+    def yaw_degrees(self) -> float:
+        return math.degrees(self.yaw)
 
 
 @runtime_checkable
@@ -61,13 +73,20 @@ class Vehicle(Protocol):
         """Fly to a position setpoint and hold it."""
 
     def set_velocity(self, vx: float, vy: float, vz: float) -> None:
-        """Hold a velocity (until another command)."""
+        """Hold a velocity (until another command). Refused beyond the vehicle's limits."""
 
     def set_yaw(self, yaw: float) -> None:
         """Turn to an absolute heading (radians) and hold it."""
 
     def hover(self) -> None:
-        """Stop and hold the current position."""
+        """Brake, then hold the position and heading where the vehicle stopped."""
+
+    def flip(self, direction: str) -> None:
+        """Flip in place toward `direction` (one of FLIP_DIRECTIONS); while it lasts
+        `state().maneuver == "flip"`, then the vehicle holds where it started."""
 
     def visible_markers(self) -> tuple[int, ...]:
         """IDs of the visual markers the camera sees now, ascending."""
+
+    def visible_object(self) -> Vec3 | None:
+        """World position of the tracked object if the camera sees it now, else None."""
