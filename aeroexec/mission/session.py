@@ -22,6 +22,7 @@ from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.vehicles.base import VehicleState
+from aeroexec.vehicles.sim import SimVehicle
 
 
 @dataclass(frozen=True)
@@ -44,12 +45,22 @@ class SessionResult:
     metadata: dict[str, str] = field(default_factory=dict)
 
 
-def _build_vehicle(world_path: str | Path | None, seed: int):  # -> SimVehicle
-    from aeroexec.vehicles.sim import SimVehicle
-    from aeroexec.vehicles.world import default_world, load_world
+def _world_text(world_path: str | Path | None) -> tuple[str, str]:
+    """The world file's text and the name to show: recorded so replay can rebuild it."""
+    from aeroexec.errors import Mark, WorldError
+    from aeroexec.vehicles.world import DEFAULT_WORLD
 
-    world = load_world(world_path) if world_path is not None else default_world()
-    return SimVehicle(world, seed=seed)
+    path = Path(world_path) if world_path is not None else DEFAULT_WORLD
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise WorldError(f"cannot read world file: {exc}", Mark(str(path))) from None
+
+
+def _build_vehicle(world_text: str, world_file: str, seed: int) -> SimVehicle:
+    from aeroexec.vehicles.world import parse_world
+
+    return SimVehicle(parse_world(world_text, world_file), seed=seed)
 
 
 def simulate(
@@ -59,12 +70,17 @@ def simulate(
     catalog: Catalog | None = None,
     script: MissionScript | None = None,
     catalog_text: str | None = None,
+    world: tuple[str, str] | None = None,
 ) -> SessionResult:
     """Run one mission in simulation. Unreadable inputs raise `AeroexecError`s before
-    anything runs (and before any recording file is created)."""
+    anything runs (and before any recording file is created).
+
+    `catalog`, `script` and `world` ((text, name)) override what `config` names: replay
+    passes the ones recorded in a session's attachments."""
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
-    vehicle = _build_vehicle(config.world, config.seed)
+    world_text, world_file = world if world is not None else _world_text(config.world)
+    vehicle = _build_vehicle(world_text, world_file, config.seed)
     metadata = {
         "aeroexec_version": __version__,
         "seed": str(config.seed),
@@ -88,6 +104,7 @@ def simulate(
             attachments={
                 "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
                 "mission.py": script.text,
+                "world.yaml": world_text,
             },
         )
         all_observers.append(recorder)
