@@ -1,0 +1,265 @@
+"""The JSON Schemas of the aeroexec MCAP profile, one per kind of channel.
+
+Every channel of an aeroexec recording carries a schema (encoding `jsonschema`) so that
+Foxglove, the `mcap` CLI and any JSON Schema validator can check its messages. The
+executive's own payloads are described by their required fields and stay open
+(`additionalProperties` allowed): a later core version may add a field without making
+older readers reject the file. The two Foxglove well-known schemas (`foxglove.Log`,
+`foxglove.PoseInFrame`) follow Foxglove's published field layout so its Log and 3D
+panels recognize the channels.
+
+Each schema's bytes are produced once, with sorted keys and no whitespace, so the same
+code always writes the same schema record.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any
+
+#: The MCAP header profile of an aeroexec recording.
+PROFILE = "aeroexec"
+SCHEMA_ENCODING = "jsonschema"
+MESSAGE_ENCODING = "json"
+
+SERVICE_CALL = "aeroexec.ServiceCall"
+BEHAVIOR_EVENT = "aeroexec.BehaviorEvent"
+ACTIVE_BEHAVIORS = "aeroexec.ActiveBehaviors"
+ACTIVE_CAPABILITIES = "aeroexec.ActiveCapabilities"
+PROCESS_STATE = "aeroexec.ProcessState"
+BELIEF_CHANGE = "aeroexec.BeliefChange"
+MISSION_COMMAND = "aeroexec.MissionCommand"
+VEHICLE_STATE = "aeroexec.VehicleState"
+GENERIC_TOPIC = "aeroexec.Topic"
+FOXGLOVE_LOG = "foxglove.Log"
+FOXGLOVE_POSE = "foxglove.PoseInFrame"
+
+_TIME: dict[str, Any] = {
+    "type": "object",
+    "title": "time",
+    "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999},
+    },
+    "required": ["sec", "nsec"],
+}
+
+_VECTOR3: dict[str, Any] = {
+    "type": "array",
+    "items": {"type": "number"},
+    "minItems": 3,
+    "maxItems": 3,
+}
+
+_EVENT_CODES = [
+    "GOAL_ACHIEVED",
+    "TIME_OUT",
+    "WRONG_PROGRESS",
+    "ASSUMPTION_CONFLICT",
+    "INTERRUPTED",
+    "PROCESS_FAILURE",
+]
+
+
+def _object(
+    title: str, description: str, properties: dict[str, Any], required: list[str]
+) -> dict[str, Any]:
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": title,
+        "description": description,
+        "type": "object",
+        "properties": properties,
+        "required": required,
+    }
+
+
+SCHEMAS: dict[str, dict[str, Any]] = {
+    SERVICE_CALL: _object(
+        SERVICE_CALL,
+        "A completed service call of the executive. seq is the call's start order; "
+        "parent_seq the call it happened inside (null at the top).",
+        {
+            "seq": {"type": "integer", "minimum": 0},
+            "parent_seq": {"type": ["integer", "null"], "minimum": 0},
+            "caller": {"type": "string"},
+            "service": {"type": "string"},
+            "request": {"type": "object"},
+            "response": {
+                "type": "object",
+                "properties": {"ok": {"type": "boolean"}, "error": {"type": "string"}},
+                "required": ["ok", "error"],
+            },
+        },
+        ["seq", "parent_seq", "caller", "service", "request", "response"],
+    ),
+    BEHAVIOR_EVENT: _object(
+        BEHAVIOR_EVENT,
+        "A behavior activation's one end event.",
+        {
+            "name": {"type": "string"},
+            "uid": {"type": "integer"},
+            "code": {"enum": _EVENT_CODES},
+            "detail": {"type": "string"},
+        },
+        ["name", "uid", "code"],
+    ),
+    ACTIVE_BEHAVIORS: _object(
+        ACTIVE_BEHAVIORS,
+        "The behaviors active now, in catalog order.",
+        {"behaviors": {"type": "array", "items": {"type": "string"}}},
+        ["behaviors"],
+    ),
+    ACTIVE_CAPABILITIES: _object(
+        ACTIVE_CAPABILITIES,
+        "The referenced capabilities with their reference counts, in catalog order.",
+        {
+            "capabilities": {
+                "type": "array",
+                "items": {
+                    "type": "object",
+                    "properties": {
+                        "name": {"type": "string"},
+                        "references": {"type": "integer", "minimum": 1},
+                    },
+                    "required": ["name", "references"],
+                },
+            }
+        },
+        ["capabilities"],
+    ),
+    PROCESS_STATE: _object(
+        PROCESS_STATE,
+        "A process started or stopped by the resource manager.",
+        {"process": {"type": "string"}, "state": {"type": "string"}},
+        ["process", "state"],
+    ),
+    BELIEF_CHANGE: _object(
+        BELIEF_CHANGE,
+        "A change of the belief store: op is the change (add, remove, ...).",
+        {"op": {"type": "string"}, "belief": {"type": "string"}},
+        ["op", "belief"],
+    ),
+    MISSION_COMMAND: _object(
+        MISSION_COMMAND,
+        "An external input: what the mission asked of the executive, and when.",
+        {
+            "command": {"type": "string"},
+            "behavior": {"type": ["string", "null"]},
+            "arguments": {"type": ["object", "null"]},
+        },
+        ["command"],
+    ),
+    VEHICLE_STATE: _object(
+        VEHICLE_STATE,
+        "The vehicle's state estimate (local ENU metres, yaw in radians).",
+        {
+            "position": _VECTOR3,
+            "velocity": _VECTOR3,
+            "yaw": {"type": "number"},
+            "battery": {"type": "number"},
+            "flying": {"type": "boolean"},
+            "armed": {"type": "boolean"},
+            "fault": {"type": "string"},
+        },
+        ["position", "velocity", "yaw", "battery", "flying"],
+    ),
+    GENERIC_TOPIC: _object(
+        GENERIC_TOPIC, "A topic of the executive without a dedicated schema.", {}, []
+    ),
+    FOXGLOVE_LOG: {
+        "title": FOXGLOVE_LOG,
+        "description": "A log message",
+        "type": "object",
+        "properties": {
+            "timestamp": _TIME,
+            "level": {
+                "title": "foxglove.LogLevel",
+                "oneOf": [
+                    {"title": "UNKNOWN", "const": 0},
+                    {"title": "DEBUG", "const": 1},
+                    {"title": "INFO", "const": 2},
+                    {"title": "WARNING", "const": 3},
+                    {"title": "ERROR", "const": 4},
+                    {"title": "FATAL", "const": 5},
+                ],
+            },
+            "message": {"type": "string"},
+            "name": {"type": "string"},
+            "file": {"type": "string"},
+            "line": {"type": "integer", "minimum": 0},
+        },
+        "required": ["timestamp", "level", "message", "name", "file", "line"],
+    },
+    FOXGLOVE_POSE: {
+        "title": FOXGLOVE_POSE,
+        "description": "A timestamped pose for an object or reference frame in 3D space",
+        "type": "object",
+        "properties": {
+            "timestamp": _TIME,
+            "frame_id": {"type": "string"},
+            "pose": {
+                "title": "foxglove.Pose",
+                "type": "object",
+                "properties": {
+                    "position": {
+                        "title": "foxglove.Vector3",
+                        "type": "object",
+                        "properties": {a: {"type": "number"} for a in "xyz"},
+                        "required": ["x", "y", "z"],
+                    },
+                    "orientation": {
+                        "title": "foxglove.Quaternion",
+                        "type": "object",
+                        "properties": {a: {"type": "number"} for a in "xyzw"},
+                        "required": ["x", "y", "z", "w"],
+                    },
+                },
+                "required": ["position", "orientation"],
+            },
+        },
+        "required": ["timestamp", "frame_id", "pose"],
+    },
+}
+
+#: Topic (relative to `/<drone>/`) -> schema name. Services all use SERVICE_CALL; a topic
+#: missing here gets GENERIC_TOPIC.
+TOPIC_SCHEMAS: dict[str, str] = {
+    "behavior_event": BEHAVIOR_EVENT,
+    "list_of_active_behaviors": ACTIVE_BEHAVIORS,
+    "list_of_active_capabilities": ACTIVE_CAPABILITIES,
+    "process_state": PROCESS_STATE,
+    "beliefs": BELIEF_CHANGE,
+    "mission/command": MISSION_COMMAND,
+    "vehicle/state": VEHICLE_STATE,
+    "vehicle/pose": FOXGLOVE_POSE,
+    "log": FOXGLOVE_LOG,
+}
+
+#: foxglove.LogLevel values by name (Python's logging names included).
+LOG_LEVELS: dict[str, int] = {
+    "DEBUG": 1,
+    "INFO": 2,
+    "WARNING": 3,
+    "WARN": 3,
+    "ERROR": 4,
+    "FATAL": 5,
+    "CRITICAL": 5,
+}
+
+
+@dataclass(frozen=True, slots=True)
+class SchemaDef:
+    name: str
+    data: bytes
+
+
+def schema_for(name: str) -> SchemaDef:
+    """The schema record content for `name` (compact, key-sorted JSON)."""
+    text = json.dumps(SCHEMAS[name], sort_keys=True, separators=(",", ":"))
+    return SchemaDef(name, text.encode())
+
+
+def schema_name_for_topic(topic: str) -> str:
+    return TOPIC_SCHEMAS.get(topic, GENERIC_TOPIC)

@@ -1,0 +1,346 @@
+"""`Recorder`: the bus observer that writes a session to an aeroexec MCAP file.
+
+    recorder = Recorder("flight.mcap", drone="drone1", metadata={...},
+                        attachments={"catalog.yaml": text, "mission.py": script})
+    executive = Executive(catalog, observers=[recorder])
+    ...
+    recorder.close()            # or: with Recorder(...) as recorder: ...
+
+The file (see docs/recording.md): profile `aeroexec`, JSON messages with one JSON Schema
+per channel, channels `/<drone>/<service>` (one per service, the completed call) and
+`/<drone>/<topic>` (behavior_event, list_of_active_behaviors, list_of_active_capabilities,
+process_state, beliefs, mission/command, vehicle/state, log as `foxglove.Log`) plus
+`/<drone>/vehicle/pose` (`foxglove.PoseInFrame`, derived from vehicle/state). Channels are
+created when first used, so their ids follow first-use order. Log time and publish time
+are the record's clock time; the MCAP sequence number counts messages from 0.
+
+**Deterministic.** Nothing depends on the wall clock, the host or chance: attachments
+carry log/create time 0, the header names only the aeroexec and mcap-python versions, chunks
+are cut at the flush bound (a function of the message stream only) and compressed with
+zstd, which gives the same bytes for the same input. Same inputs, same file, byte for byte.
+
+**Crash-safe.** FLUSH BOUND: after a message is written, the current chunk is closed and
+handed to the operating system when it holds `flush_messages` (default 100) messages or
+when its messages span `flush_interval_ns` (default 0.5 s) of clock time, whichever comes
+first. A process killed with SIGKILL therefore loses at most the last 99 messages and at
+most 0.5 s of clock time; everything before is in complete chunks that `aeroexec recover`
+(or the reader) reads from a file with no footer. The header, the metadata and the
+attachments are on disk before the first message. `close()` (also at normal interpreter
+exit, if the owner forgot) flushes and writes the summary and footer. The data reaches
+the kernel, not necessarily the disk: a power cut is not covered (no fsync per chunk).
+"""
+
+from __future__ import annotations
+
+import atexit
+import json
+import math
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, is_dataclass
+from enum import Enum
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.writer import CompressionType, Writer
+from mcap.writer import __version__ as MCAP_VERSION
+
+from aeroexec import __version__
+from aeroexec.errors import Mark, RecordingError
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.recording.schemas import (
+    FOXGLOVE_POSE,
+    LOG_LEVELS,
+    MESSAGE_ENCODING,
+    PROFILE,
+    SCHEMA_ENCODING,
+    SERVICE_CALL,
+    schema_for,
+    schema_name_for_topic,
+)
+
+#: Flush bound, in messages (see the module docstring).
+FLUSH_MESSAGES = 100
+#: Flush bound, in clock nanoseconds (see the module docstring).
+FLUSH_INTERVAL_NS = 500_000_000
+#: The metadata record's name.
+METADATA_NAME = "aeroexec"
+#: The frame `vehicle/pose` is expressed in (local ENU, the simulator's world frame).
+POSE_FRAME = "world"
+LIBRARY = f"aeroexec/{__version__} mcap-python/{MCAP_VERSION}"
+
+_COMPRESSIONS = {
+    "zstd": CompressionType.ZSTD,
+    "lz4": CompressionType.LZ4,
+    "none": CompressionType.NONE,
+}
+_MEDIA_TYPES = {
+    ".yaml": "application/yaml",
+    ".yml": "application/yaml",
+    ".py": "text/x-python",
+    ".json": "application/json",
+    ".txt": "text/plain",
+}
+_NS = 1_000_000_000
+
+
+def _default(value: Any) -> Any:
+    """JSON fallback for values the core may put in a payload."""
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, (set, frozenset)):
+        return sorted(value, key=repr)
+    if is_dataclass(value) and not isinstance(value, type):
+        return asdict(value)
+    if isinstance(value, bytes):
+        return value.hex()
+    return str(value)
+
+
+def _plain(value: Any) -> Any:
+    """A JSON-safe copy: string keys, non-finite floats as null (JSON has no NaN)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (str, int, bool)) or value is None:
+        return value
+    return _plain(_default(value))
+
+
+_ENCODE = json.JSONEncoder(separators=(",", ":"), allow_nan=False, default=_default).encode
+
+
+def encode_json(value: Any) -> bytes:
+    """Compact JSON bytes, once per message; never NaN/Infinity (invalid JSON)."""
+    try:
+        return _ENCODE(value).encode()
+    except (ValueError, TypeError):
+        return _ENCODE(_plain(value)).encode()
+
+
+def _stamp(log_time_ns: int) -> dict[str, int]:
+    sec, nsec = divmod(max(log_time_ns, 0), _NS)
+    return {"sec": sec, "nsec": nsec}
+
+
+def log_message(data: Mapping[str, Any], log_time_ns: int) -> dict[str, Any]:
+    """The executive's `log` payload as a `foxglove.Log` message."""
+    level = data.get("level", "INFO")
+    if not isinstance(level, int):
+        level = LOG_LEVELS.get(str(level).upper(), 0)
+    line = data.get("line", 0)
+    return {
+        "timestamp": _stamp(log_time_ns),
+        "level": level,
+        "message": str(data.get("message", "")),
+        "name": str(data.get("name", "")),
+        "file": str(data.get("file", "")),
+        "line": line if isinstance(line, int) and line >= 0 else 0,
+    }
+
+
+def pose_message(state: Mapping[str, Any], log_time_ns: int) -> dict[str, Any] | None:
+    """A `foxglove.PoseInFrame` from a `vehicle/state` payload (None if it has no pose)."""
+    try:
+        x, y, z = (float(v) for v in state["position"])
+        yaw = float(state.get("yaw", 0.0))
+    except (KeyError, TypeError, ValueError):
+        return None
+    if not all(math.isfinite(v) for v in (x, y, z, yaw)):
+        return None
+    return {
+        "timestamp": _stamp(log_time_ns),
+        "frame_id": POSE_FRAME,
+        "pose": {
+            "position": {"x": x, "y": y, "z": z},
+            "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
+        },
+    }
+
+
+def _media_type(name: str) -> str:
+    return _MEDIA_TYPES.get(Path(name).suffix.lower(), "application/octet-stream")
+
+
+class Recorder:
+    """A `BusObserver` writing the aeroexec MCAP profile (see the module docstring for
+    the channels, determinism and the flush bound: 100 messages or 0.5 s of clock time).
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        drone: str = "drone1",
+        metadata: Mapping[str, object] | None = None,
+        attachments: Mapping[str, str | bytes] | None = None,
+        *,
+        flush_messages: int = FLUSH_MESSAGES,
+        flush_interval_ns: int = FLUSH_INTERVAL_NS,
+        compression: str = "zstd",
+    ) -> None:
+        if flush_messages < 1 or flush_interval_ns < 0:
+            raise ValueError("flush bounds must be positive")
+        if compression not in _COMPRESSIONS:
+            raise ValueError(f"compression must be one of {sorted(_COMPRESSIONS)}")
+        self.path = Path(path)
+        self.drone = drone.strip("/")
+        self._prefix = f"/{self.drone}/"
+        self.flush_messages = flush_messages
+        self.flush_interval_ns = flush_interval_ns
+        try:
+            self._stream: IO[bytes] = open(self.path, "wb")  # noqa: SIM115 (closed by close())
+        except OSError as exc:
+            raise RecordingError(f"cannot write: {exc.strerror or exc}", Mark(str(path))) from None
+        self._writer = Writer(
+            self._stream,
+            chunk_size=4 * 1024 * 1024,
+            compression=_COMPRESSIONS[compression],
+        )
+        self._schemas: dict[str, int] = {}
+        #: full topic -> channel id
+        self._channels: dict[str, int] = {}
+        self._count = 0
+        self._pending = 0
+        self._pending_since = 0
+        self._flushed = 0
+        self._closed = False
+        self._guard(self._start, dict(metadata or {}), dict(attachments or {}))
+        atexit.register(self.close)
+
+    # -- BusObserver ---------------------------------------------------------------------
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        topic = self._prefix + record.service
+        channel = self._channels.get(topic)
+        if channel is None:
+            channel = self._channel(topic, SERVICE_CALL)
+        self._write(channel, record.log_time_ns, encode_json(record.as_dict()))
+
+    def on_topic(self, record: TopicRecord) -> None:
+        self.write_topic(record.topic, record.data, record.log_time_ns)
+
+    # -- public --------------------------------------------------------------------------
+    def write_topic(self, topic: str, data: Mapping[str, Any], log_time_ns: int) -> None:
+        """Record `data` on `/<drone>/<topic>` (what `on_topic` does for the bus)."""
+        full = self._prefix + topic
+        channel = self._channels.get(full)
+        if channel is None:
+            channel = self._channel(full, schema_name_for_topic(topic))
+        if topic == "log":
+            data = log_message(data, log_time_ns)
+        self._write(channel, log_time_ns, encode_json(data))
+        if topic == "vehicle/state":
+            pose = pose_message(data, log_time_ns)
+            if pose is not None:
+                full = self._prefix + "vehicle/pose"
+                channel = self._channels.get(full)
+                if channel is None:
+                    channel = self._channel(full, FOXGLOVE_POSE)
+                self._write(channel, log_time_ns, encode_json(pose))
+
+    @property
+    def messages_written(self) -> int:
+        """Messages handed to the MCAP writer so far."""
+        return self._count
+
+    @property
+    def messages_flushed(self) -> int:
+        """Messages already handed to the operating system (survive a SIGKILL)."""
+        return self._flushed
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def flush(self) -> None:
+        """Close the current chunk and hand everything written so far to the OS."""
+        self._check_open()
+        self._guard(self._writer.flush)
+        self._pending = 0
+        self._flushed = self._count
+
+    def close(self) -> None:
+        """Flush, write the summary and footer, close the file. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        atexit.unregister(self.close)
+        try:
+            self._guard(self._writer.finish)
+            self._flushed = self._count
+        finally:
+            self._stream.close()
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- internals -----------------------------------------------------------------------
+    def _start(self, metadata: dict[str, object], attachments: dict[str, str | bytes]) -> None:
+        self._writer.start(profile=PROFILE, library=LIBRARY)
+        values = {str(k): str(v) for k, v in metadata.items()}
+        values.setdefault("aeroexec_version", __version__)
+        values.setdefault("drone", self.drone)
+        self._writer.add_metadata(METADATA_NAME, values)
+        for name, content in attachments.items():
+            data = content.encode() if isinstance(content, str) else bytes(content)
+            self._writer.add_attachment(
+                create_time=0, log_time=0, name=name, media_type=_media_type(name), data=data
+            )
+        self._stream.flush()
+
+    def _channel(self, topic: str, schema_name: str) -> int:
+        self._check_open()
+        schema = self._schemas.get(schema_name)
+        if schema is None:
+            definition = schema_for(schema_name)
+            schema = self._writer.register_schema(
+                name=definition.name, encoding=SCHEMA_ENCODING, data=definition.data
+            )
+            self._schemas[schema_name] = schema
+        channel = self._writer.register_channel(
+            topic=topic, message_encoding=MESSAGE_ENCODING, schema_id=schema, metadata={}
+        )
+        self._channels[topic] = channel
+        return channel
+
+    def _write(self, channel: int, log_time_ns: int, data: bytes) -> None:
+        if self._closed:
+            self._check_open()
+        if self._pending == 0:
+            self._pending_since = log_time_ns
+        try:
+            self._writer.add_message(
+                channel_id=channel,
+                log_time=log_time_ns,
+                data=data,
+                publish_time=log_time_ns,
+                sequence=self._count,
+            )
+        except OSError as exc:
+            raise RecordingError(
+                f"cannot write: {exc.strerror or exc}", Mark(str(self.path))
+            ) from None
+        self._count += 1
+        self._pending += 1
+        if (
+            self._pending >= self.flush_messages
+            or log_time_ns - self._pending_since >= self.flush_interval_ns
+        ):
+            self.flush()
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RecordingError("the recorder is closed", Mark(str(self.path)))
+
+    def _guard(self, action: Callable[..., None], *args: Any) -> None:
+        try:
+            action(*args)
+        except OSError as exc:
+            raise RecordingError(
+                f"cannot write: {exc.strerror or exc}", Mark(str(self.path))
+            ) from None
