@@ -1,0 +1,327 @@
+"""The Recorder writes the aeroexec MCAP profile: checked with the `mcap` library's own
+reader and `jsonschema`, not only with aeroexec's reader."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import pytest
+from mcap.decoder import DecoderFactory
+from mcap.reader import make_reader
+from mcap.records import Schema
+
+from aeroexec.errors import RecordingError
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
+from aeroexec.recording import Recorder
+from aeroexec.recording.scan import RecordScanner
+from aeroexec.recording.schemas import SCHEMAS
+from aeroexec.recording.writer import LIBRARY
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+class JsonDecoders(DecoderFactory):
+    def decoder_for(
+        self, message_encoding: str, schema: Schema | None
+    ) -> Callable[[bytes], Any] | None:
+        return json.loads if message_encoding == "json" else None
+
+
+def _record_session(path: Path) -> None:
+    simulate(SessionConfig(mission=APPENDIX_C, record=path))
+
+
+@pytest.fixture(scope="module")
+def session_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("rec") / "appendix_c.mcap"
+    _record_session(path)
+    return path
+
+
+def _decoded(path: Path) -> list[Any]:
+    with open(path, "rb") as stream:
+        reader = make_reader(stream, decoder_factories=[JsonDecoders()])
+        return list(reader.iter_decoded_messages(log_time_order=False))
+
+
+def _readable_messages(path: Path) -> int:
+    """Messages an independent record-level pass reads from a file still being written."""
+    scanner = RecordScanner(path)
+    return sum(type(r).__name__ == "Message" for _, r in scanner.records())
+
+
+def _call(seq: int, service: str = "activate_behavior", t: int = 0) -> ServiceCallRecord:
+    return ServiceCallRecord(
+        seq, None, "mission", service, {"behavior": "TAKE_OFF"}, {"ok": True, "error": ""}, t
+    )
+
+
+# -- the profile, as the mcap library reads it ----------------------------------------------
+def test_header_profile_and_library_are_stable(session_file: Path) -> None:
+    with open(session_file, "rb") as stream:
+        header = make_reader(stream).get_header()
+    assert header.profile == "aeroexec"
+    assert header.library == LIBRARY
+    assert "mcap-python" in header.library and os.uname().nodename not in header.library
+
+
+def test_every_channel_has_a_json_schema_and_every_message_validates(session_file: Path) -> None:
+    messages = _decoded(session_file)
+    assert len(messages) > 500
+    validators: dict[int, jsonschema.protocols.Validator] = {}
+    for schema, channel, message, decoded in messages:
+        assert channel.message_encoding == "json"
+        assert schema is not None and schema.encoding == "jsonschema", channel.topic
+        if schema.id not in validators:
+            document = json.loads(schema.data)
+            cls = jsonschema.validators.validator_for(document)
+            cls.check_schema(document)
+            validators[schema.id] = cls(document)
+        validators[schema.id].validate(decoded)
+        assert message.publish_time == message.log_time
+    # All the profile's schemas that a mission uses are present.
+    names = {schema.name for schema, *_ in messages}
+    assert {
+        "aeroexec.ServiceCall",
+        "aeroexec.BehaviorEvent",
+        "aeroexec.ActiveBehaviors",
+        "aeroexec.ActiveCapabilities",
+        "aeroexec.ProcessState",
+        "aeroexec.BeliefChange",
+        "aeroexec.MissionCommand",
+        "aeroexec.VehicleState",
+        "foxglove.PoseInFrame",
+        "foxglove.Log",
+    } <= names
+
+
+def test_channels_are_namespaced_one_per_service(session_file: Path) -> None:
+    messages = _decoded(session_file)
+    topics = {channel.topic for _, channel, _, _ in messages}
+    for name in (
+        "behavior_event",
+        "list_of_active_behaviors",
+        "list_of_active_capabilities",
+        "process_state",
+        "beliefs",
+        "mission/command",
+        "vehicle/state",
+        "vehicle/pose",
+        "log",
+        "activate_behavior",
+        "inhibit_behavior",
+        "check_behavior_format",
+        "behavior_take_off/start",
+    ):
+        assert f"/drone1/{name}" in topics
+    for schema, channel, _, decoded in messages:
+        if schema.name == "aeroexec.ServiceCall":
+            assert channel.topic == "/drone1/" + decoded["service"]
+            assert set(decoded) == {"seq", "parent_seq", "caller", "service", "request", "response"}
+
+
+def test_channel_ids_follow_first_use(session_file: Path) -> None:
+    first_seen: list[int] = []
+    for _, channel, _, _ in _decoded(session_file):
+        if channel.id not in first_seen:
+            first_seen.append(channel.id)
+    assert first_seen == sorted(first_seen) == list(range(1, len(first_seen) + 1))
+
+
+def test_call_tree_can_be_rebuilt(session_file: Path) -> None:
+    calls = [d for s, _, _, d in _decoded(session_file) if s.name == "aeroexec.ServiceCall"]
+    position = {c["seq"]: i for i, c in enumerate(calls)}
+    assert len(position) == len(calls)  # seq is unique
+    nested = [c for c in calls if c["parent_seq"] is not None]
+    assert nested
+    for call in nested:
+        # a nested call completes, and is recorded, before the call it happened inside
+        assert position[call["seq"]] < position[call["parent_seq"]]
+        assert call["seq"] > call["parent_seq"]
+
+
+def test_log_time_is_the_clock(session_file: Path) -> None:
+    states = [(m, d) for s, c, m, d in _decoded(session_file) if c.topic == "/drone1/vehicle/state"]
+    times = [m.log_time for m, _ in states]
+    assert times == sorted(times)
+    assert all(t % 100_000_000 == 0 for t in times)  # 10 Hz simulated ticks
+    assert times[-1] == round(18.6e9)
+
+
+def test_metadata_and_attachments(session_file: Path) -> None:
+    with open(session_file, "rb") as stream:
+        reader = make_reader(stream)
+        metadata = {m.name: m.metadata for m in reader.iter_metadata()}
+        attachments = {a.name: a for a in reader.iter_attachments()}
+    assert metadata["aeroexec"]["seed"] == "0"
+    assert metadata["aeroexec"]["clock"] == "sim"
+    assert metadata["aeroexec"]["mission"] == "appendix_c.py"
+    assert all(isinstance(v, str) for v in metadata["aeroexec"].values())
+    assert attachments["mission.py"].data == Path(APPENDIX_C).read_bytes()
+    assert b"behavior_descriptors" in attachments["catalog.yaml"].data
+    for attachment in attachments.values():
+        assert attachment.log_time == 0 and attachment.create_time == 0
+
+
+def test_behavior_events_and_capabilities_are_recorded(session_file: Path) -> None:
+    messages = _decoded(session_file)
+    events = [d for _, c, _, d in messages if c.topic == "/drone1/behavior_event"]
+    assert [e["name"] for e in events][:2] == ["TAKE_OFF", "GO_TO_POINT"]
+    assert events[-1] == {**events[-1], "name": "LAND", "code": "GOAL_ACHIEVED"}
+    caps = [d for _, c, _, d in messages if c.topic == "/drone1/list_of_active_capabilities"]
+    assert any(
+        entry["references"] >= 1 and entry["name"] for d in caps for entry in d["capabilities"]
+    )
+
+
+# -- derived Foxglove messages ----------------------------------------------------------------
+def test_pose_quaternion_from_yaw_and_log_levels(tmp_path: Path) -> None:
+    path = tmp_path / "derived.mcap"
+    with Recorder(path) as recorder:
+        state = {
+            "position": [1.0, 2.0, 3.0],
+            "velocity": [0.0, 0.0, 0.0],
+            "yaw": math.pi / 2,
+            "battery": 0.9,
+            "flying": True,
+            "armed": True,
+            "fault": "",
+        }
+        recorder.on_topic(TopicRecord("vehicle/state", state, 1_500_000_000))
+        recorder.on_topic(TopicRecord("log", {"level": "WARNING", "message": "m", "name": "x"}, 7))
+        recorder.on_topic(TopicRecord("log", {"level": "ERROR", "message": "e", "name": "x"}, 8))
+    decoded = {c.topic: [] for _, c, _, _ in _decoded(path)}
+    for _, channel, _, data in _decoded(path):
+        decoded[channel.topic].append(data)
+    pose = decoded["/drone1/vehicle/pose"][0]
+    assert pose["timestamp"] == {"sec": 1, "nsec": 500_000_000}
+    assert pose["pose"]["position"] == {"x": 1.0, "y": 2.0, "z": 3.0}
+    q = pose["pose"]["orientation"]
+    assert q["z"] == pytest.approx(math.sqrt(0.5)) and q["w"] == pytest.approx(math.sqrt(0.5))
+    assert q["x"] == 0.0 and q["y"] == 0.0
+    logs = decoded["/drone1/log"]
+    assert [entry["level"] for entry in logs] == [3, 4]
+    assert logs[0] == {
+        "timestamp": {"sec": 0, "nsec": 7},
+        "level": 3,
+        "message": "m",
+        "name": "x",
+        "file": "",
+        "line": 0,
+    }
+    jsonschema.validate(logs[0], SCHEMAS["foxglove.Log"])
+
+
+def test_non_finite_floats_become_null_so_json_stays_valid(tmp_path: Path) -> None:
+    path = tmp_path / "nan.mcap"
+    with Recorder(path) as recorder:
+        recorder.on_topic(TopicRecord("custom", {"x": float("nan"), "y": (1, 2)}, 0))
+    ((schema, channel, _, data),) = _decoded(path)
+    assert data == {"x": None, "y": [1, 2]}
+    assert schema.name == "aeroexec.Topic" and channel.topic == "/drone1/custom"
+
+
+# -- determinism --------------------------------------------------------------------------------
+def test_two_runs_are_byte_identical(tmp_path: Path, session_file: Path) -> None:
+    again = tmp_path / "again.mcap"
+    _record_session(again)
+    assert again.read_bytes() == session_file.read_bytes()
+
+
+def test_separate_processes_with_different_hash_seeds_are_byte_identical(tmp_path: Path) -> None:
+    outputs = []
+    for hash_seed in ("1", "2"):
+        out = tmp_path / f"run{hash_seed}.mcap"
+        env = {**os.environ, "PYTHONHASHSEED": hash_seed}
+        subprocess.run(
+            [sys.executable, "-m", "aeroexec", "run", str(APPENDIX_C), "-q", "--record", str(out)],
+            check=True,
+            capture_output=True,
+            env=env,
+            cwd=tmp_path,
+        )
+        outputs.append(out.read_bytes())
+    assert outputs[0] == outputs[1]
+
+
+# -- flush bound --------------------------------------------------------------------------------
+def test_flush_after_100_messages(tmp_path: Path) -> None:
+    path = tmp_path / "count.mcap"
+    recorder = Recorder(path, flush_interval_ns=10**18)
+    for i in range(99):
+        recorder.on_service_call(_call(i))
+    assert _readable_messages(path) == 0 and recorder.messages_flushed == 0
+    recorder.on_service_call(_call(99))
+    assert _readable_messages(path) == 100 and recorder.messages_flushed == 100
+    for i in range(100, 250):
+        recorder.on_service_call(_call(i))
+    assert _readable_messages(path) == 200
+    recorder.close()
+    assert _readable_messages(path) == 250
+
+
+def test_flush_after_half_a_second_of_clock_time(tmp_path: Path) -> None:
+    path = tmp_path / "time.mcap"
+    recorder = Recorder(path)
+    state = {"position": [0, 0, 0], "velocity": [0, 0, 0], "yaw": 0.0, "battery": 1.0}
+    for tick in range(5):  # 0.0 .. 0.4 s: span 0.4 s, 10 messages (state + pose)
+        recorder.on_topic(TopicRecord("vehicle/state", {**state, "flying": False}, tick * 10**8))
+    assert _readable_messages(path) == 0
+    recorder.on_topic(TopicRecord("vehicle/state", {**state, "flying": True}, 5 * 10**8))
+    assert _readable_messages(path) == 11  # the state at 0.5 s is flushed; its pose follows
+    recorder.close()
+    assert _readable_messages(path) == 12
+
+
+def test_header_metadata_and_attachments_are_on_disk_before_any_message(tmp_path: Path) -> None:
+    path = tmp_path / "early.mcap"
+    recorder = Recorder(path, metadata={"seed": 3}, attachments={"mission.py": "x = 1\n"})
+    records = [type(r).__name__ for _, r in RecordScanner(path).records()]
+    assert records == ["Metadata", "Attachment"]
+    recorder.close()
+
+
+def test_unclosed_recorder_is_completed_at_normal_exit(tmp_path: Path) -> None:
+    path = tmp_path / "atexit.mcap"
+    code = (
+        "from aeroexec.recording import Recorder\n"
+        "from aeroexec.executive.messages import TopicRecord\n"
+        f"r = Recorder({str(path)!r})\n"
+        "for i in range(7):\n"
+        "    r.on_topic(TopicRecord('log', {'message': str(i)}, i))\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+    with open(path, "rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None and summary.statistics is not None
+    assert summary.statistics.message_count == 7
+
+
+# -- lifecycle and errors ---------------------------------------------------------------------
+def test_close_is_idempotent_and_writing_after_close_fails(tmp_path: Path) -> None:
+    path = tmp_path / "closed.mcap"
+    recorder = Recorder(path)
+    recorder.on_service_call(_call(0))
+    recorder.close()
+    size = path.stat().st_size
+    recorder.close()
+    assert path.stat().st_size == size
+    with pytest.raises(RecordingError, match="closed"):
+        recorder.on_service_call(_call(1))
+
+
+def test_unwritable_path_is_a_recording_error(tmp_path: Path) -> None:
+    with pytest.raises(RecordingError) as info:
+        Recorder(tmp_path / "missing-dir" / "x.mcap")
+    assert str(info.value).startswith(str(tmp_path / "missing-dir" / "x.mcap") + ": error: ")
+    with pytest.raises(RecordingError, match="error: cannot write"):
+        Recorder(tmp_path)
