@@ -1,0 +1,117 @@
+"""`aeroexec verify`: check catalogs (and the missions that use them) before flight."""
+
+from __future__ import annotations
+
+import glob
+import os
+import sys
+from pathlib import Path
+
+import typer
+
+from aeroexec.catalog.model import Severity
+from aeroexec.cli.app import app, guarded
+from aeroexec.errors import AeroexecError, Mark
+from aeroexec.verifier import verify
+from aeroexec.verifier.registry import get, suggest_code
+from aeroexec.verifier.report import FORMATS, render
+
+HELP = """Check behavior catalogs and mission scripts offline, before they fly.
+
+Every catalog is read leniently (all problems reported, not just the first) and
+checked by the rules of the registry: dangling references, capability conflicts that
+stop behaviors or initiation, one-sided incompatibilities, start-order cycles,
+recurrent/timeout contradictions, dead lists and capabilities. Mission scripts given
+with --mission are read with Python's ast (never run) and every execute/activate/
+inhibit call with literal arguments is checked against each catalog.
+
+\b
+Examples:
+  aeroexec verify catalog/default.yaml
+  aeroexec verify catalog/*.yaml --mission 'missions/*.py' --witness
+  aeroexec verify catalog/default.yaml --format sarif > verify.sarif
+  aeroexec verify --explain AX304
+
+\b
+Exit codes: 0 no errors; 1 errors (or warnings with --strict);
+            2 an input could not be read (one line on stderr).
+"""
+
+
+def _expand_catalogs(patterns: list[str]) -> list[str]:
+    """Paths as given; patterns the shell did not expand (quoted, or on Windows) are
+    globbed here. A pattern matching nothing is unreadable input."""
+    result: list[str] = []
+    for pattern in patterns:
+        if Path(pattern).exists() or not glob.has_magic(pattern):
+            result.append(pattern)
+            continue
+        matches = sorted(glob.glob(pattern, recursive=True))
+        if not matches:
+            raise AeroexecError("no catalog matches this pattern", Mark(pattern))
+        result.extend(matches)
+    return result
+
+
+def _use_color(choice: str | None) -> bool:
+    if choice is not None:
+        return choice == "always"
+    if os.environ.get("NO_COLOR"):
+        return False
+    return sys.stdout.isatty()
+
+
+@app.command("verify", help=HELP)
+@guarded
+def verify_command(
+    catalogs: list[str] = typer.Argument(
+        None, metavar="CATALOG...", help="Catalog files (YAML); glob patterns allowed."
+    ),
+    mission: list[str] = typer.Option(
+        [],
+        "--mission",
+        "-m",
+        metavar="PATH",
+        help="Mission script or glob (repeatable); checked against every catalog.",
+    ),
+    output_format: str = typer.Option(
+        "text", "--format", "-f", metavar="FORMAT", help="text, json, sarif or github."
+    ),
+    strict: bool = typer.Option(False, "--strict", help="Exit 1 on warnings too."),
+    witness: bool = typer.Option(
+        False, "--witness", help="Print each finding's witness activation sequence."
+    ),
+    min_severity: str = typer.Option(
+        "warning",
+        "--min-severity",
+        metavar="LEVEL",
+        help="Show findings from this level up: info, warning (default) or error.",
+    ),
+    explain: str | None = typer.Option(
+        None, "--explain", metavar="CODE", help="Print a rule's documentation and exit."
+    ),
+    color: str | None = typer.Option(
+        None, "--color", metavar="WHEN", help="always or never (default: on a terminal)."
+    ),
+) -> None:
+    if explain is not None:
+        rule = get(explain)
+        if rule is None:
+            raise AeroexecError(f"unknown rule code {explain!r}{suggest_code(explain)}")
+        typer.echo(rule.explain())
+        return
+    if output_format not in FORMATS:
+        raise AeroexecError(f"unknown format {output_format!r} (formats: {', '.join(FORMATS)})")
+    try:
+        threshold = Severity(min_severity)
+    except ValueError:
+        raise AeroexecError(f"unknown severity {min_severity!r} (info, warning or error)") from None
+    if color not in (None, "always", "never"):
+        raise AeroexecError(f"--color takes always or never, got {color!r}")
+    if not catalogs:
+        raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
+    report = verify(_expand_catalogs(catalogs), mission)
+    shown = report.at_least(threshold)
+    typer.echo(render(shown, output_format, witness=witness, color=_use_color(color)), nl=False)
+    # The exit code counts every finding, shown or not.
+    raise typer.Exit(report.exit_code(strict))

@@ -1,0 +1,74 @@
+"""Run the verifier: read catalogs and missions, apply every rule, build the report."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+from aeroexec.catalog.loader import read_catalog
+from aeroexec.catalog.model import Catalog
+from aeroexec.verifier.findings import Finding, Report
+from aeroexec.verifier.graphs import CatalogGraphs
+from aeroexec.verifier.missions import (
+    MissionScript,
+    check_mission,
+    expand_mission_paths,
+    read_mission,
+)
+from aeroexec.verifier.registry import catalog_checks
+
+CatalogInput = str | Path | Catalog
+
+
+def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[Finding]:
+    """The loader's diagnostics plus every catalog rule's findings (unsorted).
+
+    `codes` restricts the rules that run (loader diagnostics always pass through).
+    """
+    wanted = None if codes is None else set(codes)
+    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
+    graphs = CatalogGraphs(catalog)
+    for rule in catalog_checks():
+        if wanted is not None and rule.code not in wanted:
+            continue
+        assert rule.check is not None
+        findings.extend(rule.check(graphs))
+    return findings
+
+
+def verify_catalog(catalog: Catalog) -> Report:
+    """Verify one loaded catalog."""
+    return Report(tuple(check_catalog(catalog)), catalogs=(catalog.source,))
+
+
+def verify_catalog_file(path: str | Path) -> Report:
+    """Read (leniently) and verify one catalog file; `CatalogError` if unreadable."""
+    return verify_catalog(read_catalog(path))
+
+
+def verify(
+    catalogs: Sequence[CatalogInput],
+    missions: Sequence[str | Path | MissionScript] = (),
+) -> Report:
+    """Verify catalogs (paths or loaded catalogs) and the mission scripts (paths, glob
+    patterns or parsed scripts) that use them; every mission is checked against every
+    catalog.
+
+    Every input is read before any rule runs, so unreadable input raises
+    (`CatalogError` / `MissionError`, exit code 2 at the CLI) before any output.
+    """
+    loaded = [c if isinstance(c, Catalog) else read_catalog(c) for c in catalogs]
+    patterns = [m for m in missions if not isinstance(m, MissionScript)]
+    scripts = [m for m in missions if isinstance(m, MissionScript)]
+    scripts += [read_mission(path) for path in expand_mission_paths(patterns)]
+    findings: list[Finding] = []
+    for catalog in loaded:
+        findings.extend(check_catalog(catalog))
+        note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
+        for script in scripts:
+            findings.extend(check_mission(script, catalog, note))
+    return Report(
+        tuple(findings),
+        catalogs=tuple(c.source for c in loaded),
+        missions=tuple(s.path for s in scripts),
+    )

@@ -1,0 +1,192 @@
+"""What the verifier says: findings (frozen), their witnesses, and the report of a run."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from aeroexec.catalog.model import Diagnostic, Severity
+from aeroexec.errors import Mark
+
+__all__ = ["Finding", "Outcome", "Report", "Severity", "Step", "Witness"]
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    """One activation of a witness: `activate_behavior(name, arguments)`."""
+
+    activate: str
+    arguments: tuple[tuple[str, Any], ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"activate": self.activate, "arguments": dict(self.arguments)}
+
+
+class Outcome(str, Enum):
+    """What the executive does when a witness is replayed."""
+
+    #: Initiation (starting the default capabilities) fails; no activation is needed.
+    INITIATION_FAILS = "initiation-fails"
+    #: Every step but the last is accepted; the last activation is rejected.
+    REJECTED = "rejected"
+    #: Every step is accepted and every behavior named in the steps is still active.
+    ALL_ACTIVE = "all-active"
+
+
+@dataclass(frozen=True, slots=True)
+class Witness:
+    """The shortest activation sequence (from a freshly initiated executive) that makes a
+    finding's problem happen, and what happens then."""
+
+    steps: tuple[Step, ...]
+    outcome: Outcome
+
+    def to_list(self) -> list[dict[str, Any]]:
+        return [step.to_dict() for step in self.steps]
+
+    def describe(self) -> str:
+        if self.outcome is Outcome.INITIATION_FAILS:
+            return "initiation fails before any activation"
+        names = [s.activate for s in self.steps]
+        sequence = ", then ".join(f"activate {n}" for n in names)
+        if self.outcome is Outcome.REJECTED:
+            return f"{sequence}: the activation of {names[-1]} is rejected"
+        return f"{sequence}: all of {', '.join(dict.fromkeys(names))} stay active"
+
+
+@dataclass(frozen=True, slots=True)
+class Finding:
+    """One problem at one place. `line`/`column` are 1-based; 0 when unknown."""
+
+    rule: str
+    severity: Severity
+    message: str
+    file: str
+    line: int = 0
+    column: int = 0
+    subjects: tuple[str, ...] = ()
+    witness: Witness | None = None
+
+    @classmethod
+    def at(
+        cls,
+        rule: str,
+        severity: Severity,
+        message: str,
+        mark: Mark,
+        subjects: Iterable[str] = (),
+        witness: Witness | None = None,
+    ) -> Finding:
+        return cls(
+            rule,
+            severity,
+            message,
+            mark.file,
+            max(mark.line, 0),
+            max(mark.column, 0),
+            tuple(dict.fromkeys(subjects)),
+            witness,
+        )
+
+    @classmethod
+    def from_diagnostic(cls, diagnostic: Diagnostic) -> Finding:
+        return cls.at(
+            diagnostic.code,
+            diagnostic.severity,
+            diagnostic.message,
+            diagnostic.mark,
+            diagnostic.subjects,
+        )
+
+    @property
+    def mark(self) -> Mark:
+        return Mark(self.file, self.line, self.column)
+
+    @property
+    def location(self) -> str:
+        return str(self.mark)
+
+    def sort_key(self) -> tuple[str, int, int, str, str]:
+        return (self.file, self.line, self.column, self.rule, self.message)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "rule": self.rule,
+            "severity": self.severity.value,
+            "message": self.message,
+            "file": self.file,
+            "line": self.line,
+            "column": self.column,
+            "subjects": list(self.subjects),
+            "witness": None if self.witness is None else self.witness.to_list(),
+        }
+
+    def __str__(self) -> str:
+        return f"{self.location}: {self.severity.value} {self.rule} {self.message}"
+
+
+_RANK = {Severity.INFO: 0, Severity.WARNING: 1, Severity.ERROR: 2}
+
+
+@dataclass(frozen=True)
+class Report:
+    """Every finding of one verifier run, sorted by place, and the inputs it read."""
+
+    findings: tuple[Finding, ...]
+    catalogs: tuple[str, ...] = ()
+    missions: tuple[str, ...] = ()
+    #: Findings left out by `at_least` (below the severity asked for).
+    hidden: int = 0
+    _counts: Mapping[Severity, int] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        ordered = tuple(sorted(self.findings, key=Finding.sort_key))
+        object.__setattr__(self, "findings", ordered)
+        counts = dict.fromkeys(Severity, 0)
+        for finding in ordered:
+            counts[finding.severity] += 1
+        object.__setattr__(self, "_counts", counts)
+
+    @property
+    def errors(self) -> int:
+        return self._counts[Severity.ERROR]
+
+    @property
+    def warnings(self) -> int:
+        return self._counts[Severity.WARNING]
+
+    @property
+    def infos(self) -> int:
+        return self._counts[Severity.INFO]
+
+    def exit_code(self, strict: bool = False) -> int:
+        """0 no errors; 1 errors (or warnings when `strict`)."""
+        if self.errors or (strict and self.warnings):
+            return 1
+        return 0
+
+    def at_least(self, severity: Severity) -> Report:
+        """The report without findings less severe than `severity` (counted in
+        `hidden`)."""
+        rank = _RANK[severity]
+        kept = tuple(f for f in self.findings if _RANK[f.severity] >= rank)
+        return Report(
+            kept,
+            self.catalogs,
+            self.missions,
+            self.hidden + len(self.findings) - len(kept),
+        )
+
+    def by_rule(self, rule: str) -> tuple[Finding, ...]:
+        return tuple(f for f in self.findings if f.rule == rule)
+
+    def summary(self) -> dict[str, int]:
+        return {"errors": self.errors, "warnings": self.warnings, "infos": self.infos}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "findings": [f.to_dict() for f in self.findings],
+            "summary": self.summary(),
+        }

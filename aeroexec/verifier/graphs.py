@@ -1,0 +1,514 @@
+"""A loaded catalog with the indexes and graphs the rules ask questions of.
+
+Everything is computed lazily and once per catalog, in time linear in the catalog (plus
+the size of the answers): rules never loop over all pairs of behaviors.
+
+Graphs (networkx):
+
+* `conflict_graph` — undirected, capabilities, an edge per declared
+  `incompatible_capabilities` pair (symmetric, as the executive reads it);
+* `requires_graph` — directed, capability -> each capability it requires;
+* `start_order_graph` — directed, the order in which things must start: a capability
+  before its first process, each process before the next, the last process of a
+  capability before the next capability of a behavior's list, and before every
+  capability that requires it; every edge says which behavior or capability imposes it;
+* `preemption_graph` — directed, A -> B when activating A stops B (built on demand;
+  it can be quadratic in the size of a list);
+* `asymmetric_preemption_graph` — the edges A -> B of the preemption digraph whose
+  reverse B -> A is missing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from functools import cached_property
+from itertools import pairwise
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+import networkx as nx
+
+from aeroexec.catalog.model import (
+    BehaviorDescriptor,
+    BehaviorList,
+    CapabilityDescriptor,
+    Catalog,
+    Severity,
+)
+from aeroexec.errors import Mark
+from aeroexec.verifier.findings import Finding, Witness
+from aeroexec.verifier.suggest import Suggester
+
+if TYPE_CHECKING:
+    from aeroexec.verifier.witness import ActivationModel
+
+T = TypeVar("T", BehaviorDescriptor, BehaviorList, CapabilityDescriptor)
+N = TypeVar("N")
+
+#: Start-order graph nodes: ("capability", name) or ("process", name).
+Node = tuple[str, str]
+
+
+@dataclass(frozen=True, slots=True)
+class Definition(Generic[T]):
+    """One definition in file order; `effective` is False for one a later duplicate
+    replaces (the executive never sees it, the verifier still checks it)."""
+
+    item: T
+    effective: bool
+    replaced_at: int = 0  # line of the definition that replaces it
+
+
+@dataclass(frozen=True, slots=True)
+class OrderEdge:
+    """Why one thing must start before another."""
+
+    by_kind: str  # "behavior" or "capability"
+    by: str
+    reason: str
+    mark: Mark
+
+
+def node_label(node: Node) -> str:
+    return f"{node[0]} {node[1]}"
+
+
+class CatalogGraphs:
+    """The context every catalog rule receives."""
+
+    def __init__(self, catalog: Catalog) -> None:
+        self.catalog = catalog
+        self.file = catalog.source
+
+    # -- findings ------------------------------------------------------------------------
+    def finding(
+        self,
+        rule: str,
+        severity: Severity,
+        message: str,
+        mark: Mark,
+        subjects: Iterable[str] = (),
+        witness: Witness | None = None,
+    ) -> Finding:
+        if not mark.file or mark.file == "<memory>":
+            mark = Mark(self.file, mark.line, mark.column)
+        return Finding.at(rule, severity, message, mark, subjects, witness)
+
+    @property
+    def top_mark(self) -> Mark:
+        return Mark(self.file, 1, 1) if self.catalog.text else Mark(self.file)
+
+    # -- definitions (duplicates included) -----------------------------------------------
+    @cached_property
+    def behavior_defs(self) -> tuple[Definition[BehaviorDescriptor], ...]:
+        return _definitions(self.catalog.all_behaviors, self.catalog.behaviors)
+
+    @cached_property
+    def list_defs(self) -> tuple[Definition[BehaviorList], ...]:
+        return _definitions(self.catalog.all_lists, self.catalog.lists)
+
+    @cached_property
+    def capability_defs(self) -> tuple[Definition[CapabilityDescriptor], ...]:
+        return _definitions(self.catalog.all_capabilities, self.catalog.capabilities)
+
+    # -- suggestions ---------------------------------------------------------------------
+    @cached_property
+    def behavior_names(self) -> Suggester:
+        return Suggester(self.catalog.behaviors)
+
+    @cached_property
+    def list_names(self) -> Suggester:
+        return Suggester(self.catalog.lists)
+
+    @cached_property
+    def capability_names(self) -> Suggester:
+        return Suggester(self.catalog.capabilities)
+
+    # -- capability expansion (mirrors the specialist: required capabilities first) ------
+    @cached_property
+    def requires_graph(self) -> nx.DiGraph:
+        graph = nx.DiGraph()
+        for name, capability in self.catalog.capabilities.items():
+            graph.add_node(name)
+            for required in capability.required_capabilities:
+                graph.add_edge(name, required)
+        return graph
+
+    @cached_property
+    def requires_cycles(self) -> tuple[frozenset[str], ...]:
+        """Strongly connected sets of capabilities that require each other (self-loops
+        included), in catalog order."""
+        graph = self.requires_graph
+        found = [
+            frozenset(scc)
+            for scc in nx.strongly_connected_components(graph)
+            if len(scc) > 1 or graph.has_edge(next(iter(scc)), next(iter(scc)))
+        ]
+        order = self.capability_order
+        return tuple(sorted(found, key=lambda s: min(order.get(n, len(order)) for n in s)))
+
+    @cached_property
+    def capability_order(self) -> dict[str, int]:
+        return {name: i for i, name in enumerate(self.catalog.capabilities)}
+
+    @cached_property
+    def broken_capabilities(self) -> frozenset[str]:
+        """Capabilities that cannot be expanded: undefined, in a requires-cycle, or
+        requiring (transitively) one of those."""
+        graph = self.requires_graph
+        bad = {n for n in graph if n not in self.catalog.capabilities}
+        for scc in self.requires_cycles:
+            bad |= scc
+        reverse = graph.reverse(copy=False)
+        broken = set(bad)
+        for node in bad:
+            broken |= nx.descendants(reverse, node)
+        return frozenset(broken)
+
+    @cached_property
+    def _closures(self) -> dict[str, tuple[str, ...]]:
+        """Per good capability: it and everything it requires, required ones first."""
+        graph = self.requires_graph
+        broken = self.broken_capabilities
+        good = graph.subgraph(n for n in graph if n not in broken)
+        closures: dict[str, tuple[str, ...]] = {}
+        for name in reversed(list(nx.topological_sort(good))):
+            required = self.catalog.capabilities[name].required_capabilities
+            if not required:
+                closures[name] = (name,)
+                continue
+            merged: dict[str, None] = {}
+            for r in required:
+                merged.update(dict.fromkeys(closures[r]))
+            merged[name] = None
+            closures[name] = tuple(merged)
+        return closures
+
+    def closure(self, capability: str) -> tuple[str, ...] | None:
+        return self._closures.get(capability)
+
+    def expansion(self, behavior: str) -> tuple[str, ...] | None:
+        """The capabilities `behavior` references, in start order; None if one of them
+        cannot be expanded (the activation then fails)."""
+        cache = self._expansions
+        if behavior in cache:
+            return cache[behavior]
+        descriptor = self.catalog.behaviors.get(behavior)
+        result: tuple[str, ...] | None
+        if descriptor is None:
+            result = None
+        elif len(descriptor.capabilities) == 1:
+            result = self._closures.get(descriptor.capabilities[0])
+        else:
+            merged: dict[str, None] = {}
+            result = ()
+            for capability in descriptor.capabilities:
+                closure = self._closures.get(capability)
+                if closure is None:
+                    result = None
+                    break
+                merged.update(dict.fromkeys(closure))
+            if result is not None:
+                result = tuple(merged)
+        cache[behavior] = result
+        return result
+
+    @cached_property
+    def _expansions(self) -> dict[str, tuple[str, ...] | None]:
+        return {}
+
+    @cached_property
+    def defaults(self) -> tuple[str, ...]:
+        """Capabilities referenced at initiation (the executive does not expand them)."""
+        return self.catalog.default_capabilities
+
+    @cached_property
+    def holders(self) -> dict[str, tuple[str, ...]]:
+        """Capability -> behaviors (catalog order) whose expansion references it."""
+        result: dict[str, list[str]] = {}
+        for name in self.catalog.behaviors:
+            expansion = self.expansion(name)
+            if expansion:
+                for capability in expansion:
+                    result.setdefault(capability, []).append(name)
+        return {k: tuple(v) for k, v in result.items()}
+
+    @cached_property
+    def model(self) -> ActivationModel:
+        from aeroexec.verifier.witness import ActivationModel
+
+        return ActivationModel(self)
+
+    # -- capability conflicts ------------------------------------------------------------
+    @cached_property
+    def conflict_graph(self) -> nx.Graph:
+        graph = nx.Graph()
+        graph.add_nodes_from(self.catalog.capabilities)
+        for name, capability in self.catalog.capabilities.items():
+            for other in capability.incompatible_capabilities:
+                if other != name:
+                    graph.add_edge(name, other)
+        return graph
+
+    def conflict_mark(self, a: str, b: str) -> Mark:
+        """Where the conflict a-b is declared (a's entry naming b, else b's naming a)."""
+        for first, second in ((a, b), (b, a)):
+            spec = self.catalog.capabilities.get(first)
+            if spec is not None and second in spec.incompatible_capabilities:
+                index = spec.incompatible_capabilities.index(second)
+                return spec.mark_of(f"incompatible_capabilities.{index}")
+        spec = self.catalog.capabilities.get(a) or self.catalog.capabilities.get(b)
+        return spec.mark if spec is not None else self.top_mark
+
+    def own_conflict(self, behavior: str) -> tuple[str, str] | None:
+        """A pair of conflicting capabilities in the behavior's own expansion, as the
+        executive finds it (new capabilities only: defaults are already referenced)."""
+        expansion = self.expansion(behavior)
+        if not expansion or len(expansion) < 2:
+            return None
+        defaults = set(self.defaults)
+        new = [c for c in expansion if c not in defaults]
+        seen: set[str] = set()
+        for capability in new:
+            conflicts = self.catalog.conflicts_of(capability)
+            if conflicts:
+                for other in new:
+                    if other in seen and other in conflicts:
+                        return other, capability
+            seen.add(capability)
+        return None
+
+    def default_conflict(self, behavior: str) -> tuple[str, str] | None:
+        """(capability, default capability) of the behavior that conflict."""
+        expansion = self.expansion(behavior)
+        if not expansion or not self.defaults:
+            return None
+        defaults = set(self.defaults)
+        for capability in expansion:
+            if capability in defaults:
+                continue
+            clash = self.catalog.conflicts_of(capability) & defaults
+            if clash:
+                return capability, min(clash, key=self.capability_order.__getitem__)
+        return None
+
+    @cached_property
+    def activatable(self) -> frozenset[str]:
+        """Behaviors whose activation from a freshly initiated executive succeeds (as far
+        as the catalog decides it)."""
+        initiated = not self.default_pairs_in_conflict
+        return frozenset(
+            name
+            for name in self.catalog.behaviors
+            if self.expansion(name) is not None
+            and self.own_conflict(name) is None
+            and (not initiated or self.default_conflict(name) is None)
+        )
+
+    @cached_property
+    def default_pairs_in_conflict(self) -> tuple[tuple[str, str], ...]:
+        defaults = self.defaults
+        pairs = []
+        for i, capability in enumerate(defaults):
+            conflicts = self.catalog.conflicts_of(capability)
+            for other in defaults[:i]:
+                if other in conflicts:
+                    pairs.append((other, capability))
+        return tuple(pairs)
+
+    # -- lists and preemption ------------------------------------------------------------
+    @cached_property
+    def list_namers(self) -> dict[str, tuple[str, ...]]:
+        """List -> behaviors (catalog order) that name it in incompatible_lists."""
+        result: dict[str, list[str]] = {}
+        for name, behavior in self.catalog.behaviors.items():
+            for list_name in dict.fromkeys(behavior.incompatible_lists):
+                result.setdefault(list_name, []).append(name)
+        return {k: tuple(v) for k, v in result.items()}
+
+    def preempts(self, a: str, b: str) -> bool:
+        return b in self.catalog.preempted_by(a)
+
+    @cached_property
+    def preemptors(self) -> dict[str, frozenset[str]]:
+        """Defined behavior B -> behaviors whose activation stops B (they name a list
+        that contains B)."""
+        catalog = self.catalog
+        result: dict[str, set[str]] = {}
+        for list_name, namers in self.list_namers.items():
+            members = catalog.lists.get(list_name)
+            if members is None:
+                continue
+            for member in members.behaviors:
+                if member in catalog.behaviors:
+                    result.setdefault(member, set()).update(namers)
+        return {k: frozenset(v) for k, v in result.items()}
+
+    def mutual(self, behavior: str) -> frozenset[str]:
+        """Behaviors that `behavior` preempts and that preempt it back."""
+        return self.catalog.preempted_by(behavior) & self.preemptors.get(behavior, frozenset())
+
+    @cached_property
+    def asymmetric_preemption(self) -> dict[str, tuple[str, ...]]:
+        """A -> defined behaviors B (catalog order) that A preempts but that do not
+        preempt A. Cost: the size of the preemption relation, in set operations."""
+        catalog = self.catalog
+        order = catalog.order_of
+        result: dict[str, list[str]] = {}
+        for b, attackers in self.preemptors.items():
+            one_sided = attackers - catalog.preempted_by(b)
+            for a in one_sided:
+                if a != b:
+                    result.setdefault(a, []).append(b)
+        return {
+            a: tuple(sorted(bs, key=order))
+            for a, bs in sorted(result.items(), key=lambda item: order(item[0]))
+        }
+
+    @cached_property
+    def asymmetric_preemption_graph(self) -> nx.DiGraph:
+        graph = nx.DiGraph()
+        for a, victims in self.asymmetric_preemption.items():
+            graph.add_edges_from((a, b) for b in victims)
+        return graph
+
+    @cached_property
+    def preemption_graph(self) -> nx.DiGraph:
+        graph = nx.DiGraph()
+        graph.add_nodes_from(self.catalog.behaviors)
+        for name in self.catalog.behaviors:
+            graph.add_edges_from(
+                (name, victim)
+                for victim in self.catalog.preempted_by(name)
+                if victim in self.catalog.behaviors
+            )
+        return graph
+
+    def preempting_list(self, a: str, b: str) -> tuple[int, str] | None:
+        """(index in A's incompatible_lists, list name) through which A preempts B."""
+        descriptor = self.catalog.behaviors[a]
+        for index, list_name in enumerate(descriptor.incompatible_lists):
+            members = self.catalog.lists.get(list_name)
+            if members is not None and b in members.behaviors:
+                return index, list_name
+        return None
+
+    # -- start order ---------------------------------------------------------------------
+    @cached_property
+    def start_order_graph(self) -> nx.DiGraph:
+        """Edges carry `why`: the OrderEdge that imposes them (first one found)."""
+        graph = nx.DiGraph()
+        capabilities = self.catalog.capabilities
+        in_requires_cycle: dict[str, frozenset[str]] = {}
+        for scc in self.requires_cycles:
+            for name in scc:
+                in_requires_cycle[name] = scc
+
+        def add(u: Node, v: Node, why: OrderEdge) -> None:
+            if u != v and not graph.has_edge(u, v):
+                graph.add_edge(u, v, why=why)
+
+        def last(name: str) -> Node:
+            spec = capabilities[name]
+            if spec.processes:
+                return ("process", spec.processes[-1])
+            return ("capability", name)
+
+        for name, spec in capabilities.items():
+            graph.add_node(("capability", name))
+            previous: Node = ("capability", name)
+            seen: set[str] = set()
+            for index, process in enumerate(spec.processes):
+                if process in seen:
+                    continue
+                seen.add(process)
+                node: Node = ("process", process)
+                reason = (
+                    f"capability {name} starts with process {process}"
+                    if previous[0] == "capability"
+                    else f"capability {name} starts {previous[1]} before {process}"
+                )
+                add(previous, node, OrderEdge("capability", name, reason, _pmark(spec, index)))
+                previous = node
+            for index, required in enumerate(spec.required_capabilities):
+                if required not in capabilities:
+                    continue
+                scc = in_requires_cycle.get(name)
+                if scc is not None and required in scc:
+                    continue  # a requires-cycle is its own finding (AX502)
+                add(
+                    last(required),
+                    ("capability", name),
+                    OrderEdge(
+                        "capability",
+                        name,
+                        f"capability {name} requires {required}",
+                        spec.mark_of(f"required_capabilities.{index}"),
+                    ),
+                )
+        for name, behavior in self.catalog.behaviors.items():
+            previous_cap: str | None = None
+            listed: set[str] = set()
+            for index, capability in enumerate(behavior.capabilities):
+                if capability in listed:
+                    continue
+                listed.add(capability)
+                if capability not in capabilities:
+                    previous_cap = None
+                    continue
+                if previous_cap is not None:
+                    add(
+                        last(previous_cap),
+                        ("capability", capability),
+                        OrderEdge(
+                            "behavior",
+                            name,
+                            f"behavior {name} lists {previous_cap} before {capability}",
+                            behavior.mark_of(f"capabilities.{index}"),
+                        ),
+                    )
+                previous_cap = capability
+        return graph
+
+    def node_order(self, node: Node) -> tuple[int, int, str]:
+        kind, name = node
+        if kind == "capability":
+            return (0, self.capability_order.get(name, 0), name)
+        return (1, 0, name)
+
+
+def _pmark(spec: CapabilityDescriptor, index: int) -> Mark:
+    return spec.mark_of(f"processes.{index}")
+
+
+def _definitions(all_items: tuple[T, ...], effective: Mapping[str, T]) -> tuple[Definition[T], ...]:
+    items: Iterable[T] = all_items or tuple(effective.values())
+    out: list[Definition[T]] = []
+    for item in items:
+        winner = effective.get(item.name)
+        if winner is item or winner is None:
+            out.append(Definition(item, winner is item))
+        else:
+            out.append(Definition(item, False, winner.mark.line))
+    return tuple(out)
+
+
+def shortest_cycle(graph: nx.DiGraph, nodes: Iterable[N], key: Callable[[N], Any]) -> list[N]:
+    """The shortest cycle through the first (by `key`) node of a strongly connected set:
+    [start, ..., start]."""
+    members = set(nodes)
+    start = min(members, key=key)
+    sub = graph.subgraph(members)
+    paths: dict[N, list[N]] = nx.single_source_shortest_path(sub, start)
+    best: list[N] | None = None
+    for pred in sorted(sub.predecessors(start), key=key):
+        path = paths.get(pred)
+        if path is not None and (best is None or len(path) < len(best)):
+            best = path
+    if best is None:
+        raise ValueError("the nodes are not strongly connected")
+    return [*best, start]
+
+
+def cycle_edges(cycle: list[N]) -> Iterator[tuple[N, N]]:
+    return pairwise(cycle)

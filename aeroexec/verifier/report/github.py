@@ -1,0 +1,37 @@
+"""GitHub Actions workflow commands: `::error file=F,line=L,col=C,title=CODE::message`.
+
+Escaping follows the runner's rules: in the message `%`, CR and LF are %-encoded; in
+property values `:` and `,` are too.
+"""
+
+from __future__ import annotations
+
+from aeroexec.catalog.model import Severity
+from aeroexec.verifier.findings import Finding, Report
+
+_COMMANDS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.INFO: "notice"}
+
+
+def escape_data(value: str) -> str:
+    return value.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+
+
+def escape_property(value: str) -> str:
+    return escape_data(value).replace(":", "%3A").replace(",", "%2C")
+
+
+def format_finding(finding: Finding, *, witness: bool = False) -> str:
+    properties = [f"file={escape_property(finding.file)}"]
+    if finding.line:
+        properties.append(f"line={finding.line}")
+        if finding.column:
+            properties.append(f"col={finding.column}")
+    properties.append(f"title={escape_property(finding.rule)}")
+    message = finding.message
+    if witness and finding.witness is not None:
+        message += f"\nwitness: {finding.witness.describe()}"
+    return f"::{_COMMANDS[finding.severity]} {','.join(properties)}::{escape_data(message)}"
+
+
+def render(report: Report, *, witness: bool = False) -> str:
+    return "".join(format_finding(f, witness=witness) + "\n" for f in report.findings)

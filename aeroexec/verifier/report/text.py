@@ -1,0 +1,46 @@
+"""Compiler-style text: `file:line:col: severity CODE message`, then a summary line."""
+
+from __future__ import annotations
+
+import typer
+
+from aeroexec.catalog.model import Severity
+from aeroexec.verifier.findings import Finding, Report
+
+_COLORS = {Severity.ERROR: "red", Severity.WARNING: "yellow", Severity.INFO: "cyan"}
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}{'' if count == 1 else 's'}"
+
+
+def format_finding(finding: Finding, *, color: bool = False) -> str:
+    severity = finding.severity.value
+    location = finding.location
+    if color:
+        severity = typer.style(severity, fg=_COLORS[finding.severity], bold=True)
+        location = typer.style(location, bold=True)
+    return f"{location}: {severity} {finding.rule} {finding.message}"
+
+
+def summary_line(report: Report, hidden: int = 0) -> str:
+    inputs = len(report.catalogs) + len(report.missions)
+    counts = [
+        _plural(report.errors, "error"),
+        _plural(report.warnings, "warning"),
+        _plural(report.infos, "info"),
+    ]
+    line = f"{', '.join(counts)} in {_plural(inputs, 'file')}"
+    if hidden:
+        line += f" ({_plural(hidden, 'finding')} below --min-severity not shown)"
+    return line
+
+
+def render(report: Report, *, witness: bool = False, color: bool = False) -> str:
+    lines: list[str] = []
+    for finding in report.findings:
+        lines.append(format_finding(finding, color=color))
+        if witness and finding.witness is not None:
+            lines.append(f"    witness: {finding.witness.describe()}")
+    lines.append(summary_line(report, report.hidden))
+    return "\n".join(lines) + "\n"

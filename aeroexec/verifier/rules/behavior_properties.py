@@ -1,0 +1,106 @@
+"""AX6xx: behavior properties — recurrent/timeout contradictions and argument specs."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from aeroexec.catalog.model import ArgumentKind, Severity
+from aeroexec.verifier.findings import Finding
+from aeroexec.verifier.graphs import CatalogGraphs
+from aeroexec.verifier.registry import catalog_rule
+
+W = Severity.WARNING
+
+#: Argument names that mean "how long to keep doing it", in seconds.
+DURATION_ARGUMENTS = ("duration",)
+
+
+def _seconds(value: float) -> str:
+    return f"{value:g} s"
+
+
+@catalog_rule(
+    "AX601",
+    "timeout-on-recurrent",
+    W,
+    """A recurrent behavior (`recurrent: yes` or `category: recurrent`) is given a
+    `timeout`. Recurrent behaviors run until they are inhibited; the executive arms no
+    timeout for them, so the value is ignored. In flight: whoever wrote the timeout
+    expects the behavior to stop by itself, and it never does. Fix: remove the timeout,
+    or make the behavior goal-based if it really should end.""",
+)
+def timeout_on_recurrent(graphs: CatalogGraphs) -> Iterator[Finding]:
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        if behavior.recurrent and "timeout" in behavior.marks:
+            value = f" {_seconds(behavior.timeout)}" if behavior.timeout else ""
+            yield graphs.finding(
+                "AX601",
+                W,
+                f"{behavior.name} is recurrent, so its timeout{value} is ignored: it runs "
+                "until inhibited",
+                behavior.mark_of("timeout"),
+                (behavior.name,),
+            )
+
+
+@catalog_rule(
+    "AX602",
+    "timeout-shorter-than-duration",
+    W,
+    """A goal-based behavior accepts a `DURATION` argument whose largest allowed value
+    exceeds the behavior's timeout (the thesis' WAIT and KEEP_HOVERING allow up to
+    1000 s with a 15 s timeout). In flight: a long wait ends in TIME_OUT instead of
+    GOAL_ACHIEVED. Fix: raise the timeout above the largest duration, or lower the
+    bound.""",
+)
+def timeout_shorter_than_duration(graphs: CatalogGraphs) -> Iterator[Finding]:
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        if behavior.recurrent or behavior.timeout is None:
+            continue
+        for spec in behavior.arguments:
+            if spec.name.casefold() not in DURATION_ARGUMENTS:
+                continue
+            if spec.kind is not ArgumentKind.RANGE or spec.maximum is None:
+                continue
+            if spec.maximum > behavior.timeout:
+                yield graphs.finding(
+                    "AX602",
+                    W,
+                    f"{behavior.name}: {spec.name} allows up to {_seconds(spec.maximum)} but "
+                    f"the timeout is {_seconds(behavior.timeout)}: a longer wait ends in "
+                    "TIME_OUT",
+                    spec.mark if spec.mark.line else behavior.mark,
+                    (behavior.name, spec.name),
+                )
+
+
+@catalog_rule(
+    "AX603",
+    "duplicate-argument",
+    W,
+    """A behavior declares two arguments whose names differ at most in letter case.
+    Missions write argument names in any case (`coordinates=` for `COORDINATES`), so
+    the second declaration can never be used: every value is checked against the
+    first. Fix: keep one declaration.""",
+)
+def duplicate_argument(graphs: CatalogGraphs) -> Iterator[Finding]:
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        seen: dict[str, int] = {}
+        for spec in behavior.arguments:
+            key = spec.name.casefold()
+            if key in seen:
+                line = seen[key]
+                at = f" (first at line {line})" if line else ""
+                yield graphs.finding(
+                    "AX603",
+                    W,
+                    f"{behavior.name}: argument {spec.name} is declared twice{at}; the "
+                    "second declaration is never used",
+                    spec.mark if spec.mark.line else behavior.mark,
+                    (behavior.name, spec.name),
+                )
+            else:
+                seen[key] = spec.mark.line

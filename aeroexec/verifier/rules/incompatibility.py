@@ -1,0 +1,156 @@
+"""AX4xx: incompatibility — one-sided preemption, its cycles, and lists with no effect."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import networkx as nx
+
+from aeroexec.catalog.model import Severity
+from aeroexec.verifier.findings import Finding
+from aeroexec.verifier.graphs import CatalogGraphs, cycle_edges, shortest_cycle
+from aeroexec.verifier.registry import catalog_rule
+from aeroexec.verifier.witness import coexistence_witness
+
+W = Severity.WARNING
+
+_SHOWN = 8
+
+
+def _names(names: tuple[str, ...] | list[str]) -> str:
+    if len(names) <= _SHOWN:
+        return ", ".join(names)
+    return ", ".join(names[:_SHOWN]) + f" and {len(names) - _SHOWN} more"
+
+
+@catalog_rule(
+    "AX401",
+    "asymmetric-incompatibility",
+    W,
+    """Behavior A preempts behavior B (B is in one of A's `incompatible_lists`) but B
+    does not preempt A. In flight: the outcome depends on activation order —
+    activating A stops B, but activating B while A runs leaves both running (the
+    witness shows that order). Fix: make the relation symmetric (put A in a list that
+    B names, typically by having both name the same list), or document why A alone
+    must win.""",
+    witness=True,
+)
+def asymmetric_incompatibility(graphs: CatalogGraphs) -> Iterator[Finding]:
+    catalog = graphs.catalog
+    for a, victims in graphs.asymmetric_preemption.items():
+        descriptor = catalog.behaviors[a]
+        through = graphs.preempting_list(a, victims[0])
+        index, list_name = through if through is not None else (0, "")
+        witness = None
+        if a in graphs.activatable:
+            for b in victims:
+                if b in graphs.activatable:
+                    witness = coexistence_witness(graphs.model, a, b)
+                    if witness is not None:
+                        break
+        plural = len(victims) > 1
+        message = (
+            f"{a} preempts {_names(victims)} (list {list_name}) but "
+            f"{'they do' if plural else 'it does'} not preempt {a}: activated after {a}, "
+            f"{'they run' if plural else 'it runs'} beside it"
+        )
+        yield graphs.finding(
+            "AX401",
+            W,
+            message,
+            descriptor.mark_of(f"incompatible_lists.{index}"),
+            (a, *victims),
+            witness,
+        )
+
+
+@catalog_rule(
+    "AX402",
+    "asymmetric-incompatibility-cycle",
+    W,
+    """A cycle of one-sided preemptions: A preempts B, B preempts C, ... and the last
+    preempts A, none of them preempted back. In flight: which behavior survives a
+    sequence of activations depends on their order in a way nobody can keep in mind
+    (rock-paper-scissors). Fix: make the incompatibilities along the cycle symmetric,
+    or break the cycle.""",
+)
+def asymmetric_incompatibility_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
+    graph = graphs.asymmetric_preemption_graph
+    if graph.number_of_edges() == 0:
+        return
+    order = graphs.catalog.order_of
+    components = [c for c in nx.strongly_connected_components(graph) if len(c) > 1]
+    components.sort(key=lambda c: min(order(n) for n in c))
+    for component in components:
+        cycle = shortest_cycle(graph, component, order)
+        steps = []
+        for a, b in cycle_edges(cycle):
+            through = graphs.preempting_list(a, b)
+            steps.append(f"{a} preempts {b}" + (f" (list {through[1]})" if through else ""))
+        extra = len(component) - (len(cycle) - 1)
+        more = f"; {extra} more behaviors are in the same cycle set" if extra > 0 else ""
+        start = graphs.catalog.behaviors[cycle[0]]
+        through = graphs.preempting_list(cycle[0], cycle[1])
+        yield graphs.finding(
+            "AX402",
+            W,
+            "one-sided preemption cycle: " + ", ".join(steps) + more,
+            start.mark_of(f"incompatible_lists.{through[0] if through else 0}"),
+            sorted(component, key=order),
+        )
+
+
+@catalog_rule(
+    "AX403",
+    "dead-list",
+    W,
+    """A behavior list that no behavior names in `incompatible_lists`. Lists exist only
+    to be named there, so it has no effect at all — often because the name that was
+    meant to reach it is misspelled (the flown catalogs' `self_localization_behaviors`
+    is dead because behaviors name `self_localizaion_behaviors`). Fix: name it where it
+    was meant, or remove it.""",
+)
+def dead_list(graphs: CatalogGraphs) -> Iterator[Finding]:
+    named = graphs.list_namers
+    lists = graphs.catalog.lists
+    misspelt: dict[str, list[str]] = {}
+    for name in named:
+        if name not in lists:
+            close = graphs.list_names.best(name)
+            if close is not None:
+                misspelt.setdefault(close, []).append(name)
+    for name, lst in lists.items():
+        if name in named:
+            continue
+        hint = ""
+        if name in misspelt:
+            wrong = misspelt[name][0]
+            hint = f" ({_names(named[wrong])} name '{wrong}': a misspelling of it?)"
+        yield graphs.finding(
+            "AX403",
+            W,
+            f"list {name} is not named in any behavior's incompatible_lists, so it has no "
+            f"effect{hint}",
+            lst.mark,
+            (name,),
+        )
+
+
+@catalog_rule(
+    "AX404",
+    "empty-list",
+    W,
+    """A behavior list with no behaviors. Naming it in `incompatible_lists` preempts
+    nothing. Fix: fill it or remove it.""",
+)
+def empty_list(graphs: CatalogGraphs) -> Iterator[Finding]:
+    for definition in graphs.list_defs:
+        lst = definition.item
+        if not lst.behaviors:
+            yield graphs.finding(
+                "AX404",
+                W,
+                f"list {lst.name} has no behaviors",
+                lst.mark_of("behaviors"),
+                (lst.name,),
+            )

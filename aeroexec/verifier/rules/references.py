@@ -1,0 +1,290 @@
+"""AX2xx: references to lists, behaviors and capabilities that are not defined, or
+named twice."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+
+from aeroexec.catalog.model import Severity
+from aeroexec.errors import Mark
+from aeroexec.verifier.findings import Finding
+from aeroexec.verifier.graphs import CatalogGraphs, Definition
+from aeroexec.verifier.registry import catalog_rule
+from aeroexec.verifier.witness import rejection_witness
+
+E, W = Severity.ERROR, Severity.WARNING
+
+
+def _replaced(definition: Definition, kind: str) -> str:
+    if definition.effective:
+        return ""
+    return (
+        f" (in the first definition of {kind} {definition.item.name}, which the one at "
+        f"line {definition.replaced_at} replaces)"
+    )
+
+
+def _kind_of(graphs: CatalogGraphs, name: str, expected: str) -> str | None:
+    """What a name is when it is defined, but not as the `expected` kind."""
+    catalog = graphs.catalog
+    kinds = (
+        ("behavior", catalog.behaviors),
+        ("list", catalog.lists),
+        ("capability", catalog.capabilities),
+    )
+    for kind, names in kinds:
+        if kind != expected and name in names:
+            return kind
+    return None
+
+
+def _what_else(graphs: CatalogGraphs, name: str, expected: str) -> str:
+    kind = _kind_of(graphs, name, expected)
+    return f"it is a {kind}, not a {expected}" if kind else ""
+
+
+@catalog_rule(
+    "AX201",
+    "undefined-list",
+    E,
+    """A behavior's `incompatible_lists` names a list that `behavior_lists` does not
+    define (often a misspelling, like the flown catalogs' `self_localizaion_behaviors`).
+    The thesis' specialist stops loading the catalog here. In flight: the behavior
+    preempts nothing through that list, so the behaviors it was meant to stop keep
+    running beside it. Fix: correct the name (the message suggests the closest list) or
+    define the list.""",
+)
+def undefined_list(graphs: CatalogGraphs) -> Iterator[Finding]:
+    lists = graphs.catalog.lists
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        for index, name in enumerate(behavior.incompatible_lists):
+            if name in lists:
+                continue
+            other = _what_else(graphs, name, "list")
+            detail = f"; {other}" if other else graphs.list_names.hint(name)
+            yield graphs.finding(
+                "AX201",
+                E,
+                f"{behavior.name}: incompatible list '{name}' is not defined{detail}; "
+                f"{behavior.name} preempts nothing through it{_replaced(definition, 'behavior')}",
+                behavior.mark_of(f"incompatible_lists.{index}"),
+                (behavior.name, name),
+            )
+
+
+@catalog_rule(
+    "AX202",
+    "list-member-not-a-behavior",
+    E,
+    """A behavior list names something that is not a defined behavior: a misspelled or
+    removed behavior, or a capability (the thesis' Appendix A lists the capability
+    `VISUAL_SERVOING` among `motion_behaviors`). In flight: the behaviors that name the
+    list do not preempt the behavior that was meant (a misspelled member leaves the
+    real one running). Fix: name the behavior as it is defined, or remove the entry.""",
+)
+def list_member_not_a_behavior(graphs: CatalogGraphs) -> Iterator[Finding]:
+    behaviors = graphs.catalog.behaviors
+    for definition in graphs.list_defs:
+        lst = definition.item
+        for index, member in enumerate(lst.behaviors):
+            if member in behaviors:
+                continue
+            kind = _kind_of(graphs, member, "behavior")
+            if kind:
+                message = f"list {lst.name}: {member} is a {kind}, not a behavior"
+            else:
+                hint = graphs.behavior_names.hint(member)
+                message = f"list {lst.name}: {member} is not a defined behavior{hint}"
+            yield graphs.finding(
+                "AX202",
+                E,
+                message + _replaced(definition, "list"),
+                lst.mark_of(f"behaviors.{index}"),
+                (lst.name, member),
+            )
+
+
+@catalog_rule(
+    "AX203",
+    "undefined-capability",
+    E,
+    """A behavior names a capability that `capability_descriptors` does not define. In
+    flight: the resource manager cannot activate it, so every activation of the
+    behavior is rejected. Fix: define the capability (with its processes) or correct
+    the name.""",
+    witness=True,
+)
+def undefined_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
+    capabilities = graphs.catalog.capabilities
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        for index, name in enumerate(behavior.capabilities):
+            if name in capabilities:
+                continue
+            other = _what_else(graphs, name, "capability")
+            detail = f" ({other})" if other else graphs.capability_names.hint(name)
+            witness = None
+            if definition.effective:
+                witness = rejection_witness(graphs.model, (behavior.name,), behavior.name)
+            yield graphs.finding(
+                "AX203",
+                E,
+                f"{behavior.name}: capability '{name}' is not defined{detail}: every "
+                f"activation of {behavior.name} is rejected{_replaced(definition, 'behavior')}",
+                behavior.mark_of(f"capabilities.{index}"),
+                (behavior.name, name),
+                witness,
+            )
+
+
+@catalog_rule(
+    "AX204",
+    "undefined-incompatible-capability",
+    W,
+    """A capability's `incompatible_capabilities` names a capability that is not defined
+    (the IMAV 2017 catalogs declare `SETPOINT_BASED_FLIGHT_CONTROL` incompatible with an
+    undefined `VISUAL_SERVOING`). In flight: nothing, and that is the problem — the
+    conflict it was meant to prevent is not checked against the capability actually
+    used. Fix: correct the name or remove the entry.""",
+)
+def undefined_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
+    capabilities = graphs.catalog.capabilities
+    for definition in graphs.capability_defs:
+        spec = definition.item
+        for index, name in enumerate(spec.incompatible_capabilities):
+            if name in capabilities:
+                continue
+            other = _what_else(graphs, name, "capability")
+            detail = f" ({other})" if other else graphs.capability_names.hint(name)
+            yield graphs.finding(
+                "AX204",
+                W,
+                f"capability {spec.name}: incompatible capability '{name}' is not "
+                f"defined{detail}; the conflict it declares is never checked",
+                spec.mark_of(f"incompatible_capabilities.{index}"),
+                (spec.name, name),
+            )
+
+
+@catalog_rule(
+    "AX205",
+    "undefined-required-capability",
+    E,
+    """A capability's `required_capabilities` names a capability that is not defined
+    (flown catalogs kept requiring `SELF_LOCALIZATION_BY_VISUAL_MARKERS` after it was
+    removed). The executive starts required capabilities first, so it cannot expand
+    the capability. In flight: every behavior that uses it is rejected at activation.
+    Fix: define the required capability or remove the requirement.""",
+    witness=True,
+)
+def undefined_required_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
+    capabilities = graphs.catalog.capabilities
+    users = _users_by_capability(graphs)
+    for definition in graphs.capability_defs:
+        spec = definition.item
+        for index, name in enumerate(spec.required_capabilities):
+            if name in capabilities:
+                continue
+            other = _what_else(graphs, name, "capability")
+            detail = f" ({other})" if other else graphs.capability_names.hint(name)
+            affected = users.get(spec.name, ()) if definition.effective else ()
+            witness = None
+            if affected:
+                consequence = f"; behaviors using it are rejected: {', '.join(affected)}"
+                witness = rejection_witness(graphs.model, affected[:1], affected[0])
+            else:
+                consequence = "; no behavior uses it yet"
+            yield graphs.finding(
+                "AX205",
+                E,
+                f"capability {spec.name} requires '{name}', which is not defined"
+                f"{detail}{consequence}",
+                spec.mark_of(f"required_capabilities.{index}"),
+                (spec.name, name, *affected),
+                witness,
+            )
+
+
+def _users_by_capability(graphs: CatalogGraphs) -> dict[str, tuple[str, ...]]:
+    """Capability -> behaviors (catalog order) that reference it, directly or through
+    required capabilities, whether or not the expansion succeeds."""
+    capabilities = graphs.catalog.capabilities
+    result: dict[str, list[str]] = {}
+    for name, behavior in graphs.catalog.behaviors.items():
+        reached: set[str] = set()
+        stack = [c for c in behavior.capabilities if c in capabilities]
+        while stack:
+            current = stack.pop()
+            if current in reached:
+                continue
+            reached.add(current)
+            stack.extend(
+                r for r in capabilities[current].required_capabilities if r in capabilities
+            )
+        for capability in reached:
+            result.setdefault(capability, []).append(name)
+    return {k: tuple(v) for k, v in result.items()}
+
+
+MarkOf = Callable[[str], Mark]
+
+
+def _repeats(
+    graphs: CatalogGraphs,
+    owner: str,
+    subject: str,
+    field: str,
+    names: Sequence[str],
+    mark_of: MarkOf,
+) -> Iterator[Finding]:
+    first: dict[str, int] = {}
+    for index, name in enumerate(names):
+        if name not in first:
+            first[name] = index
+            continue
+        earlier = mark_of(f"{field}.{first[name]}")
+        at = f" (first at line {earlier.line})" if earlier.line else ""
+        yield graphs.finding(
+            "AX206",
+            W,
+            f"{owner}: '{name}' is named twice in {field}{at}",
+            mark_of(f"{field}.{index}"),
+            (subject, name),
+        )
+
+
+@catalog_rule(
+    "AX206",
+    "repeated-reference",
+    W,
+    """The same name appears twice in one reference list: a list's `behaviors`, a
+    behavior's `incompatible_lists` or `capabilities`, a capability's `processes`,
+    `incompatible_capabilities` or `required_capabilities`. The repetition has no
+    effect (capabilities are referenced once per behavior, processes started once), but
+    it usually hides a different name that was meant. Fix: remove or correct it.""",
+)
+def repeated_reference(graphs: CatalogGraphs) -> Iterator[Finding]:
+    for b in graphs.behavior_defs:
+        behavior = b.item
+        for field in ("incompatible_lists", "capabilities"):
+            names = getattr(behavior, field)
+            yield from _repeats(
+                graphs, behavior.name, behavior.name, field, names, behavior.mark_of
+            )
+    for entry in graphs.list_defs:
+        lst = entry.item
+        yield from _repeats(
+            graphs, f"list {lst.name}", lst.name, "behaviors", lst.behaviors, lst.mark_of
+        )
+    for c in graphs.capability_defs:
+        spec = c.item
+        for field in ("processes", "incompatible_capabilities", "required_capabilities"):
+            yield from _repeats(
+                graphs,
+                f"capability {spec.name}",
+                spec.name,
+                field,
+                getattr(spec, field),
+                spec.mark_of,
+            )
