@@ -233,6 +233,17 @@ def test_empty_battery_forces_a_landing() -> None:
         vehicle.take_off(1.0)
 
 
+def test_an_empty_battery_landing_cannot_be_turned_into_a_hover() -> None:
+    world = World(battery=BatteryModel(initial=0.01, flight_endurance=1200.0))
+    vehicle = airborne(world, altitude=3.0)
+    run(vehicle, 7.5)  # 12 s of charge in all: empty now, and landing
+    assert vehicle.state().fault == "battery_empty" and vehicle.state().flying
+    with pytest.raises(VehicleCommandError, match="battery is empty"):
+        vehicle.hover()
+    run(vehicle, 8.0)
+    assert not vehicle.state().flying and vehicle.state().altitude == 0.0
+
+
 def test_scheduled_failures_strike_at_their_time() -> None:
     world = World(
         failures=(ScheduledFailure("low_battery", 3.0), ScheduledFailure("stuck_motor", 5.0))

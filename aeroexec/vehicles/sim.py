@@ -186,6 +186,8 @@ class SimVehicle:
         # Holding still is what a stuck or flipping vehicle does anyway: not an error.
         if self._fault == "stuck_motor" or self._mode == "flip":
             return
+        # Braking to a hover would stop the forced landing of an empty battery.
+        self._refuse_if_depleted("hover")
         if not self.airborne:
             raise VehicleCommandError("hover: refused, the vehicle is on the ground")
         self._mode = "brake"
