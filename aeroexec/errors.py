@@ -8,6 +8,23 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+#: Every character `str.splitlines` breaks on, and the other C0 controls (tab is kept).
+_LINE_BREAKING = {
+    c: f"\\x{c:02x}" if c < 0x100 else f"\\u{c:04x}"
+    for c in [*range(0x20), 0x7F, 0x85, 0x2028, 0x2029]
+    if c != 0x09
+}
+_LINE_BREAKING |= {ord("\n"): "\\n", ord("\r"): "\\r"}
+
+
+def one_line(text: str) -> str:
+    """`text` with line breaks and control characters escaped.
+
+    Messages quote names and keys from the input (`unknown tag '...'`); a key with a
+    newline in it must not split a `file:line:col: ...` line in two.
+    """
+    return text.translate(_LINE_BREAKING)
+
 
 @dataclass(frozen=True, slots=True)
 class Mark:
@@ -33,8 +50,8 @@ class AeroexecError(Exception):
 
     def __str__(self) -> str:
         if self.mark is None:
-            return self.message
-        return f"{self.mark}: error: {self.message}"
+            return one_line(self.message)
+        return one_line(f"{self.mark}: error: {self.message}")
 
 
 class CatalogError(AeroexecError):

@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
-from aeroexec.errors import Mark
+from aeroexec.errors import Mark, one_line
 
 DEFAULT_TIMEOUT_S = 15.0
 #: The mark of entries built in code rather than read from a file.
@@ -36,7 +36,7 @@ class Diagnostic:
     subjects: tuple[str, ...] = ()
 
     def __str__(self) -> str:
-        return f"{self.mark}: {self.severity.value} {self.code} {self.message}"
+        return one_line(f"{self.mark}: {self.severity.value} {self.code} {self.message}")
 
 
 class ArgumentKind(str, Enum):
