@@ -961,3 +961,18 @@ def test_deep_nesting_is_an_error_not_a_crash(text: str) -> None:
 
 def test_utf8_bom_is_accepted() -> None:
     assert "GO" in parse_catalog("\ufeff" + BASE).behaviors
+
+
+def test_names_with_line_breaks_stay_on_one_line() -> None:
+    # Found by the fuzzer: a key with a newline split a diagnostic line in two.
+    text = '"bad\\nkey": 1\n"B\\u2028X": 2\nbehavior_descriptors: []\ncapability_descriptors: []\n'
+    catalog = parse_catalog(text, "c.yaml")
+    unknown = [str(d) for d in only(catalog, codes.UNKNOWN_TAG)]
+    assert unknown == [
+        "c.yaml:1:1: warning AX104 unknown tag 'bad\\nkey' in the catalog",
+        "c.yaml:2:1: warning AX104 unknown tag 'B\\u2028X' in the catalog",
+    ]
+    assert only(catalog, codes.UNKNOWN_TAG)[0].message == "unknown tag 'bad\nkey' in the catalog"
+    with pytest.raises(CatalogError) as err:
+        parse_catalog('"a\\rb": !!python/none x\n', "c.yaml")
+    assert "\r" not in str(err.value) and len(str(err.value).splitlines()) == 1

@@ -132,6 +132,13 @@ BAD: dict[str, Bad] = {
         _text("behavior_descriptors: &x [1, *x]\n"),
         lambda p: f"{p}:1:30: error: recursive alias: a node contains itself",
     ),
+    "name with a newline": Bad(
+        _text(GOOD.replace("behavior: GO", 'behavior: "G\\nO"').replace("30", "fast")),
+        lambda p: (
+            f"{p}:3:14: error: G\\nO: timeout must be a positive number of seconds, "
+            "got str ('fast') [AX105]"
+        ),
+    ),
     "empty file": Bad(
         b"",
         lambda p: f"{p}:1:1: error: empty document: a catalog needs behavior_descriptors",

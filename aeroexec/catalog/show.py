@@ -30,7 +30,7 @@ from aeroexec.catalog.model import (
     Diagnostic,
     Severity,
 )
-from aeroexec.errors import Mark
+from aeroexec.errors import Mark, one_line
 
 #: Bumped when a JSON field changes meaning or disappears (adding fields is compatible).
 JSON_FORMAT = "aeroexec.catalog.show/1"
@@ -226,7 +226,8 @@ def render_plain(catalog: Catalog) -> str:
         f"diagnostics ({_severity_counts(facts.diagnostics)})",
     ]
     out += [str(d) for d in facts.diagnostics]
-    return "\n".join(out) + "\n"
+    # Names come from the YAML and may hold newlines; one entry must stay one line.
+    return "\n".join(one_line(line) for line in out) + "\n"
 
 
 # -- rich (terminal) ----------------------------------------------------------------------
@@ -293,9 +294,9 @@ def render_rich(catalog: Catalog, console: Console) -> None:
 
     console.print(Text(f"Diagnostics ({_severity_counts(facts.diagnostics)})", style="bold"))
     for diagnostic in facts.diagnostics:
-        line = Text(f"{diagnostic.mark}: ")
+        line = Text(one_line(f"{diagnostic.mark}: "))
         line.append(diagnostic.severity.value, style=_SEVERITY_STYLE[diagnostic.severity])
-        line.append(f" {diagnostic.code} {diagnostic.message}")
+        line.append(one_line(f" {diagnostic.code} {diagnostic.message}"))
         console.print(line, soft_wrap=True)
 
 
