@@ -1,0 +1,485 @@
+"""`MavSim`: the simulated vehicle (`SimVehicle`) behind an ArduCopter-like MAVLink face.
+
+It speaks the part of ArduCopter's protocol that aeroexec's GUIDED-mode backend uses, over
+UDP, in real time: HEARTBEAT at 1 Hz, LOCAL_POSITION_NED and ATTITUDE at 10 Hz,
+SYS_STATUS and EXTENDED_SYS_STATE at 2 Hz (EXTENDED_SYS_STATE also when the landed state
+changes), a COMMAND_ACK for every COMMAND_LONG and SET_MODE, and ArduCopter's refusals:
+take-off while disarmed, not in GUIDED or already flying; arming in LAND mode; disarming
+in the air; yaw commands on the ground or outside GUIDED; unknown modes and commands.
+Setpoints (SET_POSITION_TARGET_LOCAL_NED) are obeyed only in GUIDED while flying, as
+ArduCopter does; a velocity setpoint lapses after 3 s without a new one.
+
+Fault injection for tests: heartbeats dropped for a while after take-off, commands
+refused by name (TEMPORARILY_REJECTED), every Nth outgoing packet corrupted; and a
+`speed_factor` that runs the vehicle model faster than the wall clock (positions,
+velocities and rates reported are then those of the sped-up vehicle, so the ground
+station sees a consistent, just faster, aircraft).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from aeroexec.mavlink.codec import MAVLinkMessage, command_name, command_number, result_name
+from aeroexec.mavlink.convert import (
+    COPTER_MODES,
+    GUIDED,
+    LAND,
+    STABILIZE,
+    enu_to_ned,
+    ned_to_enu,
+    wrap_pi,
+    yaw_enu_to_ned,
+    yaw_ned_to_enu,
+)
+from aeroexec.mavlink.endpoint import DEFAULT_VEHICLE_URL, parse_endpoint
+from aeroexec.mavlink.link import Link
+from aeroexec.vehicles.base import VehicleCommandError
+
+#: Modes mavsim can be put in; in the air all but LAND brake and hold.
+SUPPORTED_MODES = (STABILIZE, GUIDED, 5, LAND, 16, 17)  # + LOITER, POSHOLD, BRAKE
+VELOCITY_TIMEOUT = 3.0  # s: ArduCopter's GUIDED velocity-setpoint timeout
+FORCE_DISARM = 21196.0  # param2 magic of MAV_CMD_COMPONENT_ARM_DISARM
+#: Default telemetry rates (Hz) by message id.
+DEFAULT_RATES: dict[int, float] = {
+    mavlink.MAVLINK_MSG_ID_HEARTBEAT: 1.0,
+    mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED: 10.0,
+    mavlink.MAVLINK_MSG_ID_ATTITUDE: 10.0,
+    mavlink.MAVLINK_MSG_ID_SYS_STATUS: 2.0,
+    mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 2.0,
+}
+LOOP_PERIOD = 0.005  # s: how often the loop wakes at most
+
+
+@dataclass(frozen=True, slots=True)
+class MavSimConfig:
+    url: str = DEFAULT_VEHICLE_URL
+    allow_remote: bool = False
+    signing_key: bytes | None = None
+    system: int = 1
+    component: int = 1
+    #: Vehicle seconds per wall-clock second.
+    speed_factor: float = 1.0
+    #: Wall-clock seconds to run; None: until stopped.
+    duration: float | None = None
+    #: Heartbeats stop this many seconds after the first accepted take-off ...
+    drop_heartbeats_at: float | None = None
+    #: ... for this many seconds.
+    drop_for: float = 5.0
+    #: Commands answered TEMPORARILY_REJECTED (MAV_CMD numbers).
+    refuse: tuple[int, ...] = ()
+    #: Corrupt (flip a CRC byte of) every Nth packet sent; 0: never.
+    corrupt_every: int = 0
+    world: str | Path | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.speed_factor) and self.speed_factor > 0):
+            raise ValueError(f"speed factor must be positive, got {self.speed_factor}")
+        if self.duration is not None and not self.duration > 0:
+            raise ValueError(f"duration must be positive, got {self.duration}")
+        if self.corrupt_every < 0:
+            raise ValueError(f"corrupt-every must be >= 0, got {self.corrupt_every}")
+        if self.drop_for < 0:
+            raise ValueError(f"drop-for must be >= 0, got {self.drop_for}")
+
+
+def refuse_numbers(names: list[str] | tuple[str, ...]) -> tuple[int, ...]:
+    """`--refuse` values (MAV_CMD_NAV_TAKEOFF, nav_takeoff, 22) -> command numbers."""
+    out: list[int] = []
+    for name in names:
+        out.append(int(name) if name.strip().isdigit() else command_number(name))
+    return tuple(out)
+
+
+@dataclass
+class _Counters:
+    dropped_heartbeats: int = 0
+    ignored_setpoints: int = 0
+    commands: list[dict[str, Any]] = field(default_factory=list)
+    setpoints: Counter[str] = field(default_factory=Counter)
+
+
+class MavSim:
+    def __init__(
+        self, config: MavSimConfig | None = None, *, clock: Callable[[], float] = time.monotonic
+    ) -> None:
+        from aeroexec.vehicles.sim import SimVehicle
+        from aeroexec.vehicles.world import default_world, load_world
+
+        self.config = config if config is not None else MavSimConfig()
+        self.endpoint = parse_endpoint(self.config.url, allow_remote=self.config.allow_remote)
+        world = load_world(self.config.world) if self.config.world else default_world()
+        self.sim = SimVehicle(world)
+        self.link = Link(
+            self.endpoint,
+            system=self.config.system,
+            component=self.config.component,
+            key=self.config.signing_key,
+            corrupt_every=self.config.corrupt_every,
+        )
+        self._clock = clock
+        self.started = clock()
+        self._last_step = self.started
+        self.mode = STABILIZE
+        self.armed = False
+        self.counters = _Counters()
+        self._rates = dict(DEFAULT_RATES)
+        self._next_due: dict[int, float] = dict.fromkeys(self._rates, self.started)
+        self._landed_state = mavlink.MAV_LANDED_STATE_ON_GROUND
+        self._take_off_at: float | None = None
+        self._launched = False
+        self._velocity_at: float | None = None
+        self._last_result: tuple[int, int] | None = None  # (command, result)
+        self.gcs: tuple[int, int] | None = None
+
+    # -- running -------------------------------------------------------------------------
+    @property
+    def elapsed(self) -> float:
+        return self._clock() - self.started
+
+    def run(self, should_stop: Callable[[], bool] = lambda: False) -> None:
+        """Serve until `duration` passed or `should_stop()` is true."""
+        while not should_stop():
+            if self.config.duration is not None and self.elapsed >= self.config.duration:
+                break
+            self.tick(LOOP_PERIOD)
+        self.tick(0.0)  # whatever arrived meanwhile is counted too
+
+    def tick(self, wait: float) -> None:
+        """Receive (waiting at most `wait` s), advance the model, send what is due."""
+        for item in self.link.poll(wait):
+            self._receive(item.msg, item.address)
+        now = self._clock()
+        dt = now - self._last_step
+        if dt > 0:
+            self._last_step = now
+            self._advance(dt)
+        self._telemetry(now)
+
+    def close(self) -> None:
+        self.link.close()
+
+    # -- the model -----------------------------------------------------------------------
+    @property
+    def flying(self) -> bool:
+        return self.sim.state().flying
+
+    @property
+    def in_flight(self) -> bool:
+        """Flying, or launched and not yet back on the ground (ArduCopter's
+        `!land_complete`): what take-off and disarming are refused in."""
+        return self.flying or self._launched
+
+    def _advance(self, dt: float) -> None:
+        was_armed = self.sim.state().armed
+        self.sim.step(dt * self.config.speed_factor)
+        state = self.sim.state()
+        if was_armed and not state.armed:
+            self.armed = False  # touched down: ArduCopter disarms after landing
+            self._launched = False
+        if (
+            self._velocity_at is not None
+            and self._clock() - self._velocity_at > VELOCITY_TIMEOUT
+            and self.flying
+        ):
+            self._velocity_at = None
+            self.sim.hover()
+        landed = self._landed()
+        if landed != self._landed_state:
+            self._landed_state = landed
+            self._send_extended_sys_state()
+
+    def _landed(self) -> int:
+        if not self.flying:
+            return mavlink.MAV_LANDED_STATE_ON_GROUND
+        if self.mode == LAND:
+            return mavlink.MAV_LANDED_STATE_LANDING
+        return mavlink.MAV_LANDED_STATE_IN_AIR
+
+    # -- telemetry -----------------------------------------------------------------------
+    def _telemetry(self, now: float) -> None:
+        for message_id, rate in self._rates.items():
+            if rate <= 0 or now < self._next_due[message_id]:
+                continue
+            self._next_due[message_id] = max(self._next_due[message_id] + 1.0 / rate, now)
+            self._send_stream(message_id)
+
+    def _send_stream(self, message_id: int) -> None:
+        if message_id == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
+            self._send_heartbeat()
+        elif message_id == mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED:
+            state = self.sim.state()
+            k = self.config.speed_factor
+            x, y, z = enu_to_ned(state.position)
+            vx, vy, vz = enu_to_ned(state.velocity)
+            self._send(
+                mavlink.MAVLink_local_position_ned_message(
+                    self._boot_ms(), x, y, z, vx * k, vy * k, vz * k
+                )
+            )
+        elif message_id == mavlink.MAVLINK_MSG_ID_ATTITUDE:
+            state = self.sim.state()
+            self._send(
+                mavlink.MAVLink_attitude_message(
+                    self._boot_ms(), 0.0, 0.0, yaw_enu_to_ned(state.yaw), 0.0, 0.0, 0.0
+                )
+            )
+        elif message_id == mavlink.MAVLINK_MSG_ID_SYS_STATUS:
+            battery = self.sim.state().battery
+            self._send(
+                mavlink.MAVLink_sys_status_message(
+                    0,
+                    0,
+                    0,
+                    0,
+                    int(10500 + 2100 * battery),
+                    -1,
+                    round(battery * 100),
+                    0,
+                    0,
+                    0,
+                    0,
+                    0,
+                    0,
+                )
+            )
+        elif message_id == mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE:
+            self._send_extended_sys_state()
+
+    def _send_heartbeat(self) -> None:
+        at = self.config.drop_heartbeats_at
+        if at is not None and self._take_off_at is not None:
+            since = self._clock() - self._take_off_at
+            if at <= since < at + self.config.drop_for:
+                self.counters.dropped_heartbeats += 1
+                return
+        base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_STABILIZE_ENABLED
+        if self.mode == GUIDED:
+            base |= mavlink.MAV_MODE_FLAG_GUIDED_ENABLED
+        if self.armed:
+            base |= mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+        status = mavlink.MAV_STATE_ACTIVE if self.armed else mavlink.MAV_STATE_STANDBY
+        self._send(
+            mavlink.MAVLink_heartbeat_message(
+                mavlink.MAV_TYPE_QUADROTOR,
+                mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                base,
+                self.mode,
+                status,
+                3,
+            )
+        )
+
+    def _send_extended_sys_state(self) -> None:
+        self._send(
+            mavlink.MAVLink_extended_sys_state_message(
+                mavlink.MAV_VTOL_STATE_UNDEFINED, self._landed_state
+            )
+        )
+
+    def _send(self, msg: MAVLinkMessage) -> None:
+        self.link.send(msg)
+
+    def _boot_ms(self) -> int:
+        return int(self.elapsed * 1000) & 0xFFFFFFFF
+
+    # -- receiving -----------------------------------------------------------------------
+    def _receive(self, msg: MAVLinkMessage, address: tuple[str, int]) -> None:
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            if msg.type == mavlink.MAV_TYPE_GCS and self.gcs is None:
+                self.gcs = (msg.get_srcSystem(), msg.get_srcComponent())
+                self.link.lock(address)
+            return
+        if getattr(msg, "target_system", 0) not in (0, self.config.system):
+            return  # for another vehicle
+        if kind == "COMMAND_LONG":
+            self._command_long(msg)
+        elif kind == "SET_MODE":
+            self._ack(msg, mavlink.MAVLINK_MSG_ID_SET_MODE, self._set_mode_message(msg))
+        elif kind == "SET_POSITION_TARGET_LOCAL_NED":
+            self._setpoint(msg)
+
+    def _ack(self, msg: MAVLinkMessage, command: int, result: int) -> None:
+        self.counters.commands.append(
+            {
+                "t": round(self.elapsed, 3),
+                "command": command_name(command),
+                "result": result_name(result),
+            }
+        )
+        self._send(
+            mavlink.MAVLink_command_ack_message(
+                command, result, 0, 0, msg.get_srcSystem(), msg.get_srcComponent()
+            )
+        )
+
+    def _command_long(self, msg: MAVLinkMessage) -> None:
+        command = int(msg.command)
+        if (
+            msg.confirmation > 0
+            and self._last_result is not None
+            and self._last_result[0] == command
+        ):
+            # A retransmission of what we just answered (our ack was lost): same answer,
+            # without doing it twice.
+            self._ack(msg, command, self._last_result[1])
+            return
+        if command in self.config.refuse:
+            result = mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+        else:
+            result = self._execute(command, msg)
+        self._last_result = (command, result)
+        self._ack(msg, command, result)
+
+    def _execute(self, command: int, msg: MAVLinkMessage) -> int:
+        ok, failed = mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_FAILED
+        if command == mavlink.MAV_CMD_DO_SET_MODE:
+            if not int(msg.param1) & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+                return failed
+            return self._enter_mode(int(msg.param2))
+        if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
+            if msg.param1 >= 0.5:
+                if self.armed:
+                    return ok
+                if self.mode == LAND or self.in_flight or self.sim.state().battery <= 0.0:
+                    return failed
+                self.armed = True
+                return ok
+            if self.in_flight and msg.param2 != FORCE_DISARM:
+                return failed
+            self.armed = False
+            return ok
+        if command == mavlink.MAV_CMD_NAV_TAKEOFF:
+            altitude = float(msg.param7)
+            if self.mode != GUIDED or not self.armed or self.in_flight:
+                return failed
+            if not (math.isfinite(altitude) and altitude > 0):
+                return failed
+            try:
+                self.sim.take_off(altitude)
+            except VehicleCommandError:
+                return failed
+            self._launched = True
+            if self._take_off_at is None:
+                self._take_off_at = self._clock()
+            return ok
+        if command == mavlink.MAV_CMD_NAV_LAND:
+            return self._enter_mode(LAND)
+        if command == mavlink.MAV_CMD_CONDITION_YAW:
+            if self.mode != GUIDED or not self.flying or not math.isfinite(msg.param1):
+                return failed
+            heading = math.radians(msg.param1)
+            if msg.param4 >= 0.5:  # relative: param3 gives the direction
+                sign = -1.0 if msg.param3 < 0 else 1.0
+                heading = yaw_enu_to_ned(self.sim.state().yaw) + sign * heading
+            try:
+                self.sim.set_yaw(yaw_ned_to_enu(heading))
+            except VehicleCommandError:
+                return failed
+            return ok
+        if command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
+            message_id, interval = int(msg.param1), float(msg.param2)
+            if message_id not in DEFAULT_RATES or message_id == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
+                return mavlink.MAV_RESULT_UNSUPPORTED if message_id not in DEFAULT_RATES else ok
+            if interval < 0:
+                self._rates[message_id] = 0.0
+            elif interval == 0:
+                self._rates[message_id] = DEFAULT_RATES[message_id]
+            else:
+                self._rates[message_id] = 1e6 / interval
+            return ok
+        return mavlink.MAV_RESULT_UNSUPPORTED
+
+    def _set_mode_message(self, msg: MAVLinkMessage) -> int:
+        if not msg.base_mode & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+            return mavlink.MAV_RESULT_FAILED
+        return self._enter_mode(int(msg.custom_mode))
+
+    def _enter_mode(self, mode: int) -> int:
+        if mode not in SUPPORTED_MODES:
+            return mavlink.MAV_RESULT_FAILED
+        self.mode = mode
+        self._velocity_at = None
+        if self.flying:
+            try:
+                if mode == LAND:
+                    self.sim.land()
+                else:
+                    self.sim.hover()  # GUIDED, LOITER, BRAKE...: stop and hold
+            except VehicleCommandError:
+                return mavlink.MAV_RESULT_FAILED
+        return mavlink.MAV_RESULT_ACCEPTED
+
+    def _setpoint(self, msg: MAVLinkMessage) -> None:
+        if (
+            msg.coordinate_frame != mavlink.MAV_FRAME_LOCAL_NED
+            or self.mode != GUIDED
+            or not self.flying
+        ):
+            self.counters.ignored_setpoints += 1
+            return
+        mask = int(msg.type_mask)
+        k = self.config.speed_factor
+        try:
+            if not mask & mavlink.POSITION_TARGET_TYPEMASK_YAW_IGNORE and math.isfinite(msg.yaw):
+                self.sim.set_yaw(yaw_ned_to_enu(msg.yaw))
+            if not mask & 0b111:  # position used
+                self.counters.setpoints["position"] += 1
+                self._velocity_at = None
+                self.sim.go_to(*ned_to_enu((msg.x, msg.y, msg.z)))
+            elif not mask & 0b111000:  # velocity used
+                self.counters.setpoints["velocity"] += 1
+                vx, vy, vz = ned_to_enu((msg.vx, msg.vy, msg.vz))
+                if vx == 0.0 and vy == 0.0 and vz == 0.0:
+                    self._velocity_at = None
+                    self.sim.hover()
+                else:
+                    self._velocity_at = self._clock()
+                    self.sim.set_velocity(*self._clamp(vx / k, vy / k, vz / k))
+        except VehicleCommandError:
+            self.counters.ignored_setpoints += 1
+
+    def _clamp(self, vx: float, vy: float, vz: float) -> tuple[float, float, float]:
+        limits = self.sim.world.limits
+        horizontal = math.hypot(vx, vy)
+        if horizontal > limits.horizontal_speed:
+            scale = limits.horizontal_speed / horizontal
+            vx, vy = vx * scale, vy * scale
+        vz = max(-limits.vertical_speed, min(limits.vertical_speed, vz))
+        return (vx, vy, vz)
+
+    # -- reporting -----------------------------------------------------------------------
+    def stats(self) -> dict[str, Any]:
+        state = self.sim.state()
+        return {
+            **self.link.stats.as_dict(),
+            "dropped_heartbeats": self.counters.dropped_heartbeats,
+            "ignored_setpoints": self.counters.ignored_setpoints,
+            "setpoints": dict(self.counters.setpoints),
+            "commands": self.counters.commands,
+            "final": {
+                "mode": COPTER_MODES.get(self.mode, str(self.mode)),
+                "armed": self.armed,
+                "flying": state.flying,
+                "position": [round(c, 4) for c in state.position],
+                "yaw_deg": round(math.degrees(wrap_pi(state.yaw)), 3),
+            },
+            "elapsed_s": round(self.elapsed, 3),
+        }
+
+    def write_stats(self, path: str | Path) -> None:
+        text = json.dumps(self.stats(), indent=2, sort_keys=True) + "\n"
+        if str(path) == "-":
+            print(text, end="")
+        else:
+            Path(path).write_text(text, encoding="utf-8")

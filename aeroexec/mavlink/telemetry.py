@@ -1,0 +1,103 @@
+"""What the autopilot tells us, folded into aeroexec's `VehicleState`.
+
+`Telemetry.apply(msg)` is the only place a received message changes what the executive
+believes about the vehicle (and so its beliefs: `flying(self)`, `position(self, ...)`,
+`battery_level(self, ...)`): HEARTBEAT (armed, mode), LOCAL_POSITION_NED (position and
+velocity), ATTITUDE (yaw), SYS_STATUS (battery), EXTENDED_SYS_STATE (landed state).
+Frames are converted here, once (see `aeroexec.mavlink.convert`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from aeroexec.mavlink.codec import MAVLinkMessage
+from aeroexec.mavlink.convert import Vec3, mode_name, ned_to_enu, yaw_ned_to_enu
+from aeroexec.vehicles.base import VehicleState
+
+#: Without EXTENDED_SYS_STATE, an armed vehicle above this height (m) counts as flying.
+FLYING_ALTITUDE = 0.3
+_AIRBORNE_STATES = (
+    mavlink.MAV_LANDED_STATE_IN_AIR,
+    mavlink.MAV_LANDED_STATE_TAKEOFF,
+    mavlink.MAV_LANDED_STATE_LANDING,
+)
+
+
+def is_autopilot_heartbeat(msg: MAVLinkMessage) -> bool:
+    """A HEARTBEAT from a flight controller (not a GCS, gimbal, camera or radio)."""
+    return (
+        msg.get_type() == "HEARTBEAT"
+        and msg.autopilot != mavlink.MAV_AUTOPILOT_INVALID
+        and msg.type != mavlink.MAV_TYPE_GCS
+    )
+
+
+@dataclass
+class Telemetry:
+    """The latest values, in MAVLink's own frame (NED), plus what was heard at all."""
+
+    position_ned: Vec3 = (0.0, 0.0, 0.0)
+    velocity_ned: Vec3 = (0.0, 0.0, 0.0)
+    yaw_ned: float = 0.0
+    battery: float = 1.0
+    armed: bool = False
+    custom_mode: int = -1
+    system_status: int = 0
+    landed_state: int = mavlink.MAV_LANDED_STATE_UNDEFINED
+    heartbeats: int = 0
+    positions: int = 0
+
+    @property
+    def mode(self) -> str:
+        return "UNKNOWN" if self.custom_mode < 0 else mode_name(self.custom_mode)
+
+    @property
+    def flying(self) -> bool:
+        if self.landed_state in _AIRBORNE_STATES:
+            return True
+        if self.landed_state == mavlink.MAV_LANDED_STATE_ON_GROUND:
+            return False
+        return self.armed and -self.position_ned[2] > FLYING_ALTITUDE
+
+    def apply(self, msg: MAVLinkMessage) -> bool:
+        """Fold one message in; True if it changed what telemetry holds."""
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            if not is_autopilot_heartbeat(msg):
+                return False
+            self.heartbeats += 1
+            self.armed = bool(msg.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
+            if msg.base_mode & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
+                self.custom_mode = int(msg.custom_mode)
+            self.system_status = int(msg.system_status)
+            return True
+        if kind == "LOCAL_POSITION_NED":
+            self.positions += 1
+            self.position_ned = (float(msg.x), float(msg.y), float(msg.z))
+            self.velocity_ned = (float(msg.vx), float(msg.vy), float(msg.vz))
+            return True
+        if kind == "ATTITUDE":
+            self.yaw_ned = float(msg.yaw)
+            return True
+        if kind == "SYS_STATUS":
+            if msg.battery_remaining >= 0:  # -1: the autopilot does not know
+                self.battery = min(1.0, msg.battery_remaining / 100.0)
+            return True
+        if kind == "EXTENDED_SYS_STATE":
+            self.landed_state = int(msg.landed_state)
+            return True
+        return False
+
+    def vehicle_state(self, fault: str = "") -> VehicleState:
+        return VehicleState(
+            position=ned_to_enu(self.position_ned),
+            velocity=ned_to_enu(self.velocity_ned),
+            yaw=yaw_ned_to_enu(self.yaw_ned),
+            battery=self.battery,
+            flying=self.flying,
+            armed=self.armed,
+            fault=fault,
+        )

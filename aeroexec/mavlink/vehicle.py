@@ -1,0 +1,546 @@
+"""`MavlinkVehicle`: the `Vehicle` protocol over MAVLink, for ArduPilot Copter in GUIDED.
+
+One thread. `step(dt)` polls the link without blocking, folds telemetry into the state,
+sends the ground station's 1 Hz heartbeat and watches the autopilot's. Commands that
+MAVLink acknowledges (mode changes, arming, take-off, yaw, landing) are sent as
+COMMAND_LONG and wait for their COMMAND_ACK, polling the link meanwhile, with a timeout
+and bounded retries (the `confirmation` field counts the retransmissions); a refusal
+raises `VehicleCommandError("MAV_CMD_NAV_TAKEOFF refused: TEMPORARILY_REJECTED")`.
+Setpoints (`go_to`, `set_velocity`, `hover`) are SET_POSITION_TARGET_LOCAL_NED, which
+MAVLink never acknowledges: they are checked against the mode and state first.
+
+Link health: when no autopilot heartbeat arrived for `heartbeat_timeout` seconds the link
+is lost: `state().fault == "link_lost"`, every command raises, and a `mavlink/link`
+event is published. When heartbeats come back, the configured failsafe runs (`hold`:
+brake and hold where the vehicle is; `land`: switch to LAND).
+
+Every packet in and out is handed to `tap(topic, payload)` (wired to the executive's
+bus by `aeroexec.mission.live.fly`); until a tap is attached the vehicle keeps them and
+hands them over on attachment, so the recording starts with the connection.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from aeroexec.mavlink.codec import MAVLinkMessage, command_name, result_name
+from aeroexec.mavlink.convert import (
+    GUIDED,
+    LAND,
+    enu_to_ned,
+    heading_degrees,
+    mode_name,
+    yaw_enu_to_ned,
+)
+from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
+from aeroexec.mavlink.link import Link, LinkStats, Received
+from aeroexec.mavlink.telemetry import Telemetry, is_autopilot_heartbeat
+from aeroexec.vehicles.base import VehicleCommandError, VehicleState
+
+Failsafe = Literal["hold", "land"]
+FAILSAFES: tuple[Failsafe, ...] = ("hold", "land")
+Tap = Callable[[str, Any], None]
+
+#: Messages (and rates, Hz) requested from the autopilot with MAV_CMD_SET_MESSAGE_INTERVAL.
+STREAMS: tuple[tuple[int, float], ...] = (
+    (mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, 10.0),
+    (mavlink.MAVLINK_MSG_ID_ATTITUDE, 10.0),
+    (mavlink.MAVLINK_MSG_ID_SYS_STATUS, 2.0),
+    (mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, 2.0),
+)
+#: Traffic kept while no tap is attached (beyond it, only counted).
+MAX_BUFFERED = 100_000
+
+_IGNORE_VELOCITY = (
+    mavlink.POSITION_TARGET_TYPEMASK_VX_IGNORE
+    | mavlink.POSITION_TARGET_TYPEMASK_VY_IGNORE
+    | mavlink.POSITION_TARGET_TYPEMASK_VZ_IGNORE
+)
+_IGNORE_POSITION = (
+    mavlink.POSITION_TARGET_TYPEMASK_X_IGNORE
+    | mavlink.POSITION_TARGET_TYPEMASK_Y_IGNORE
+    | mavlink.POSITION_TARGET_TYPEMASK_Z_IGNORE
+)
+_IGNORE_ACCELERATION = (
+    mavlink.POSITION_TARGET_TYPEMASK_AX_IGNORE
+    | mavlink.POSITION_TARGET_TYPEMASK_AY_IGNORE
+    | mavlink.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+)
+#: Position setpoint with a heading (yaw rate ignored).
+POSITION_MASK = (
+    _IGNORE_VELOCITY | _IGNORE_ACCELERATION | mavlink.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
+)
+#: Velocity setpoint with a heading.
+VELOCITY_MASK = (
+    _IGNORE_POSITION | _IGNORE_ACCELERATION | mavlink.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE
+)
+
+
+@dataclass(frozen=True, slots=True)
+class MavlinkConfig:
+    url: str = DEFAULT_GCS_URL
+    allow_remote: bool = False
+    #: 32-byte MAVLink 2 signing key (see `codec.signing_key`), or None for no signing.
+    signing_key: bytes | None = None
+    heartbeat_timeout: float = 3.0
+    failsafe: Failsafe = "hold"
+    ack_timeout: float = 1.0
+    retries: int = 2
+    connect_timeout: float = 10.0
+    #: Our own identity: a ground station (255) / onboard companion component.
+    system: int = 255
+    component: int = 190
+    #: The autopilot's system id; None: the first autopilot heard.
+    target_system: int | None = None
+    gcs_heartbeat_period: float = 1.0
+    #: ArduCopter drops a velocity setpoint after 3 s; it is re-sent this often.
+    velocity_resend_period: float = 1.0
+    request_streams: bool = True
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.heartbeat_timeout) and self.heartbeat_timeout > 0):
+            raise ValueError(f"heartbeat timeout must be positive, got {self.heartbeat_timeout}")
+        if self.failsafe not in FAILSAFES:
+            raise ValueError(f"failsafe must be one of {', '.join(FAILSAFES)}")
+        if not (math.isfinite(self.ack_timeout) and self.ack_timeout > 0):
+            raise ValueError(f"ack timeout must be positive, got {self.ack_timeout}")
+        if self.retries < 0:
+            raise ValueError(f"retries must be >= 0, got {self.retries}")
+        if not (math.isfinite(self.connect_timeout) and self.connect_timeout > 0):
+            raise ValueError(f"connect timeout must be positive, got {self.connect_timeout}")
+
+
+class MavlinkVehicle:
+    """A live ArduCopter (or anything speaking its GUIDED-mode protocol, like `mavsim`)."""
+
+    kind = "mavlink"
+
+    def __init__(
+        self,
+        config: MavlinkConfig | None = None,
+        *,
+        tap: Tap | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.config = config if config is not None else MavlinkConfig()
+        self.endpoint = parse_endpoint(self.config.url, allow_remote=self.config.allow_remote)
+        self._clock = clock
+        self._start = clock()
+        self._tap: Tap | None = tap
+        self._buffered: list[tuple[str, Any]] = []
+        self.dropped_before_tap = 0
+        self.link = Link(
+            self.endpoint,
+            system=self.config.system,
+            component=self.config.component,
+            key=self.config.signing_key,
+            tap=self._emit,
+        )
+        self.telemetry = Telemetry()
+        #: (system, component) of the autopilot, once its first heartbeat arrived.
+        self.target: tuple[int, int] | None = None
+        self._last_heartbeat = -math.inf
+        self.link_lost = False
+        self.link_losses = 0
+        self._failsafe_pending = False
+        self._acks: list[MAVLinkMessage] = []
+        self._commanded_mode: int | None = None
+        self._yaw_target_ned: float | None = None
+        self._velocity_ned: tuple[float, float, float] | None = None
+        self._next_gcs_heartbeat = -math.inf
+        self._next_velocity = math.inf
+        self._streams_requested = False
+
+    # -- the tap -------------------------------------------------------------------------
+    @property
+    def tap(self) -> Tap | None:
+        return self._tap
+
+    @tap.setter
+    def tap(self, tap: Tap | None) -> None:
+        """Attach (or detach) the traffic tap; what arrived before is handed over now."""
+        self._tap = tap
+        if tap is not None:
+            buffered, self._buffered = self._buffered, []
+            for topic, payload in buffered:
+                tap(topic, payload)
+
+    def _emit(self, topic: str, payload: Any) -> None:
+        if self._tap is not None:
+            self._tap(topic, payload)
+        elif len(self._buffered) < MAX_BUFFERED:
+            self._buffered.append((topic, payload))
+        else:
+            self.dropped_before_tap += 1
+
+    def _event(self, event: str, **detail: Any) -> None:
+        self._emit("mavlink/link", {"event": event, "url": self.endpoint.url, **detail})
+
+    def _log(self, message: str, level: str = "WARNING") -> None:
+        self._emit("log", {"level": level, "name": "mavlink", "message": message})
+
+    # -- connection ----------------------------------------------------------------------
+    @property
+    def stats(self) -> LinkStats:
+        return self.link.stats
+
+    @property
+    def connected(self) -> bool:
+        return self.target is not None and not self.link_lost
+
+    def connect(self, timeout: float | None = None) -> None:
+        """Wait for the autopilot's heartbeat and a first position; request the streams.
+        `MavlinkError` if it does not come within `timeout` (default: the config's)."""
+        limit = self.config.connect_timeout if timeout is None else timeout
+        deadline = self._clock() + limit
+        while self.target is None or self.telemetry.positions == 0:
+            remaining = deadline - self._clock()
+            if remaining <= 0:
+                raise MavlinkError(self._no_connection_text(limit))
+            self._process(self.link.poll(min(remaining, 0.05)))
+            self._service()
+            if self.target is not None and not self._streams_requested:
+                self._streams_requested = True
+                self._request_streams()
+        self._event(
+            "connected",
+            system=self.target[0],
+            component=self.target[1],
+            mode=self.telemetry.mode,
+            armed=self.telemetry.armed,
+        )
+
+    def _no_connection_text(self, limit: float) -> str:
+        if self.target is None:
+            text = f"no heartbeat from {self.endpoint.url} within {limit:g} s"
+        else:
+            text = (
+                f"heartbeat from {self.endpoint.url} but no LOCAL_POSITION_NED within "
+                f"{limit:g} s (has the autopilot a position estimate?)"
+            )
+        rejected = self.link.stats.rejected
+        if rejected:
+            reasons = ", ".join(f"{n} {reason}" for reason, n in sorted(rejected.items()))
+            text += f" ({reasons} packets rejected)"
+        return text
+
+    def _request_streams(self) -> None:
+        if not self.config.request_streams:
+            return
+        for message_id, rate in STREAMS:
+            try:
+                self._command(
+                    mavlink.MAV_CMD_SET_MESSAGE_INTERVAL,
+                    (float(message_id), 1e6 / rate),
+                    retries=0,
+                )
+            except VehicleCommandError as exc:
+                self._log(f"stream request not granted: {exc}")
+
+    def close(self) -> None:
+        self.link.close()
+
+    # -- the Vehicle protocol: observation -----------------------------------------------
+    def state(self) -> VehicleState:
+        return self.telemetry.vehicle_state(self._fault())
+
+    def _fault(self) -> str:
+        if self.link_lost:
+            return "link_lost"
+        if self.target is None:
+            return "not_connected"
+        if (
+            self._commanded_mode is not None
+            and self.telemetry.custom_mode != self._commanded_mode
+            and self.telemetry.flying
+        ):
+            return f"mode_changed:{self.telemetry.mode}"
+        return ""
+
+    def visible_markers(self) -> tuple[int, ...]:
+        return ()  # no marker detection over MAVLink
+
+    def visible_object(self) -> tuple[float, float, float] | None:
+        return None
+
+    # -- the Vehicle protocol: time ------------------------------------------------------
+    def step(self, dt: float) -> None:
+        self._process(self.link.poll())
+        self._acks.clear()  # nobody is waiting for one now
+        self._service()
+        if self._failsafe_pending and not self.link_lost:
+            self._failsafe_pending = False
+            self._run_failsafe()
+
+    def _process(self, received: list[Received]) -> None:
+        for item in received:
+            msg = item.msg
+            src = msg.get_srcSystem()
+            if self.target is None:
+                wanted = self.config.target_system
+                if is_autopilot_heartbeat(msg) and (wanted is None or wanted == src):
+                    self.target = (src, msg.get_srcComponent())
+                    self.link.lock(item.address)
+                else:
+                    self.link.count_rejected("before_heartbeat")
+                    self.link.record_rx(msg, "before the autopilot's first heartbeat")
+                    continue
+            elif src != self.target[0]:
+                self.link.count_rejected("foreign_system")
+                self.link.record_rx(msg, f"foreign system {src}")
+                continue
+            self.link.record_rx(msg)
+            self._handle(msg, item)
+
+    def _handle(self, msg: MAVLinkMessage, item: Received) -> None:
+        # Only the autopilot's own component speaks for the vehicle (a gimbal on the same
+        # system sends ATTITUDE and HEARTBEAT too).
+        if self.target is None or msg.get_srcComponent() != self.target[1]:
+            return
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            self._heartbeat(item)
+            return
+        if kind == "COMMAND_ACK":
+            mine = msg.target_system in (0, self.config.system)
+            if mine:
+                self._acks.append(msg)
+            return
+        if kind == "STATUSTEXT":
+            self._log(f"autopilot: {msg.format_attr('text')}", _severity(msg.severity))
+            return
+        self.telemetry.apply(msg)
+
+    def _heartbeat(self, item: Received) -> None:
+        self.telemetry.apply(item.msg)
+        self._last_heartbeat = self._clock()
+        if self.link_lost:
+            self.link_lost = False
+            self.link.lock(item.address)
+            self._failsafe_pending = True
+            self._event("restored", failsafe=self.config.failsafe)
+
+    def _service(self) -> None:
+        now = self._clock()
+        if now >= self._next_gcs_heartbeat:
+            self.link.send(
+                mavlink.MAVLink_heartbeat_message(
+                    mavlink.MAV_TYPE_GCS,
+                    mavlink.MAV_AUTOPILOT_INVALID,
+                    0,
+                    0,
+                    mavlink.MAV_STATE_ACTIVE,
+                    3,
+                )
+            )
+            self._next_gcs_heartbeat = now + self.config.gcs_heartbeat_period
+        if (
+            self.target is not None
+            and not self.link_lost
+            and now - self._last_heartbeat > self.config.heartbeat_timeout
+        ):
+            self.link_lost = True
+            self.link_losses += 1
+            self.link.unlock()
+            self._event("lost", silent_s=round(now - self._last_heartbeat, 3))
+        if self._velocity_ned is not None and now >= self._next_velocity and not self.link_lost:
+            self._send_velocity(self._velocity_ned)
+
+    def _run_failsafe(self) -> None:
+        if not self.telemetry.flying:
+            self._event("failsafe", action="none", reason="not flying")
+            return
+        try:
+            if self.config.failsafe == "land":
+                self._set_mode(LAND)
+            else:
+                self._brake()
+            self._event("failsafe", action=self.config.failsafe)
+        except VehicleCommandError as exc:
+            self._event("failsafe", action=self.config.failsafe, error=str(exc))
+            self._log(f"failsafe {self.config.failsafe} failed: {exc}", "ERROR")
+
+    # -- commands ------------------------------------------------------------------------
+    def _require_link(self, what: str) -> tuple[int, int]:
+        if self.target is None:
+            raise VehicleCommandError(f"{what}: refused, no autopilot connected")
+        if self.link_lost:
+            raise VehicleCommandError(
+                f"{what}: refused, link lost (no heartbeat for {self.config.heartbeat_timeout:g} s)"
+            )
+        return self.target
+
+    def _require_guided_flight(self, what: str) -> None:
+        self._require_link(what)
+        if not self.telemetry.flying:
+            raise VehicleCommandError(f"{what}: refused, the vehicle is on the ground")
+        if self.telemetry.custom_mode != GUIDED:
+            raise VehicleCommandError(
+                f"{what}: refused, the autopilot is in {self.telemetry.mode} mode, not GUIDED"
+            )
+
+    def _command(
+        self, command: int, params: tuple[float, ...], *, retries: int | None = None
+    ) -> MAVLinkMessage:
+        """Send COMMAND_LONG and wait for its ACCEPTED ack; raise on refusal or silence."""
+        target = self._require_link(command_name(command))
+        name = command_name(command)
+        p = (*params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:7]
+        attempts = 1 + (self.config.retries if retries is None else retries)
+        self._acks.clear()
+        for attempt in range(attempts):
+            self.link.send(
+                mavlink.MAVLink_command_long_message(
+                    target[0], target[1], command, min(attempt, 255), *p
+                )
+            )
+            deadline = self._clock() + self.config.ack_timeout
+            while True:
+                for ack in self._acks:
+                    if ack.command != command:
+                        continue
+                    if ack.result == mavlink.MAV_RESULT_IN_PROGRESS:
+                        deadline = self._clock() + self.config.ack_timeout
+                        continue
+                    self._acks.clear()
+                    if ack.result == mavlink.MAV_RESULT_ACCEPTED:
+                        return ack
+                    raise VehicleCommandError(f"{name} refused: {result_name(ack.result)}")
+                self._acks.clear()
+                remaining = deadline - self._clock()
+                if remaining <= 0:
+                    break
+                self._process(self.link.poll(min(remaining, 0.05)))
+                self._service()
+                if self.link_lost:
+                    raise VehicleCommandError(
+                        f"{name}: link lost while waiting for COMMAND_ACK (no heartbeat for "
+                        f"{self.config.heartbeat_timeout:g} s)"
+                    )
+        raise VehicleCommandError(
+            f"{name}: no COMMAND_ACK after {attempts} attempt{'s' if attempts > 1 else ''} "
+            f"({self.config.ack_timeout:g} s each)"
+        )
+
+    def _set_mode(self, mode: int) -> None:
+        self._command(
+            mavlink.MAV_CMD_DO_SET_MODE,
+            (float(mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED), float(mode)),
+        )
+        self._commanded_mode = mode
+        self.telemetry.custom_mode = mode  # the next heartbeat will say so too
+
+    def _arm(self) -> None:
+        self._command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+        self.telemetry.armed = True
+
+    def take_off(self, altitude: float) -> None:
+        self._require_link("take_off")
+        if self.telemetry.flying:
+            raise VehicleCommandError("take_off: refused, already flying")
+        if not (math.isfinite(altitude) and altitude > 0.0):
+            raise VehicleCommandError(f"take_off: altitude must be positive, got {altitude}")
+        if self.telemetry.custom_mode != GUIDED:
+            self._set_mode(GUIDED)
+        self._commanded_mode = GUIDED
+        if not self.telemetry.armed:
+            self._arm()
+        self._command(mavlink.MAV_CMD_NAV_TAKEOFF, (0.0, 0.0, 0.0, math.nan, 0.0, 0.0, altitude))
+        self._yaw_target_ned = self.telemetry.yaw_ned
+        self._velocity_ned = None
+
+    def land(self) -> None:
+        self._require_link("land")
+        if not self.telemetry.flying:
+            raise VehicleCommandError("land: refused, the vehicle is on the ground")
+        self._velocity_ned = None
+        self._set_mode(LAND)
+
+    def go_to(self, x: float, y: float, z: float) -> None:
+        self._require_guided_flight("go_to")
+        if not all(math.isfinite(c) for c in (x, y, z)):
+            raise VehicleCommandError(f"go_to: not a position: ({x}, {y}, {z})")
+        if z < 0.0:
+            raise VehicleCommandError(f"go_to: z = {z:g} m is below the ground")
+        north, east, down = enu_to_ned((float(x), float(y), float(z)))
+        self._velocity_ned = None
+        self._send_target(POSITION_MASK, (north, east, down), (0.0, 0.0, 0.0))
+
+    def set_velocity(self, vx: float, vy: float, vz: float) -> None:
+        self._require_guided_flight("set_velocity")
+        if not all(math.isfinite(c) for c in (vx, vy, vz)):
+            raise VehicleCommandError(f"set_velocity: not a velocity: ({vx}, {vy}, {vz})")
+        self._send_velocity(enu_to_ned((float(vx), float(vy), float(vz))))
+
+    def set_yaw(self, yaw: float) -> None:
+        self._require_guided_flight("set_yaw")
+        if not math.isfinite(yaw):
+            raise VehicleCommandError(f"set_yaw: not an angle: {yaw}")
+        # param1 heading (deg, CW from north), param2 rate (0: default), param3 direction
+        # (0: the shorter way), param4 0: absolute.
+        self._command(mavlink.MAV_CMD_CONDITION_YAW, (heading_degrees(yaw), 0.0, 0.0, 0.0))
+        self._yaw_target_ned = yaw_enu_to_ned(yaw)
+
+    def hover(self) -> None:
+        self._require_guided_flight("hover")
+        self._brake()
+
+    def flip(self, direction: str) -> None:
+        raise VehicleCommandError(
+            "flip: not supported over MAVLink (ArduCopter's FLIP mode needs a pilot's sticks)"
+        )
+
+    def _brake(self) -> None:
+        """Zero velocity: the autopilot decelerates and holds where it stops."""
+        self._velocity_ned = None
+        self._send_target(VELOCITY_MASK, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+    def _send_velocity(self, velocity_ned: tuple[float, float, float]) -> None:
+        self._velocity_ned = velocity_ned
+        self._next_velocity = self._clock() + self.config.velocity_resend_period
+        self._send_target(VELOCITY_MASK, (0.0, 0.0, 0.0), velocity_ned)
+
+    def _send_target(
+        self,
+        mask: int,
+        position: tuple[float, float, float],
+        velocity: tuple[float, float, float],
+    ) -> None:
+        target = self._require_link("SET_POSITION_TARGET_LOCAL_NED")
+        yaw = self._yaw_target_ned if self._yaw_target_ned is not None else self.telemetry.yaw_ned
+        boot_ms = int((self._clock() - self._start) * 1000) & 0xFFFFFFFF
+        self.link.send(
+            mavlink.MAVLink_set_position_target_local_ned_message(
+                boot_ms,
+                target[0],
+                target[1],
+                mavlink.MAV_FRAME_LOCAL_NED,
+                mask,
+                *position,
+                *velocity,
+                0.0,
+                0.0,
+                0.0,
+                yaw,
+                0.0,
+            )
+        )
+
+    # -- reporting -----------------------------------------------------------------------
+    def describe(self) -> str:
+        mode = mode_name(self.telemetry.custom_mode) if self.telemetry.custom_mode >= 0 else "?"
+        return f"{self.endpoint.url} system {self.target} mode {mode}"
+
+
+def _severity(severity: int) -> str:
+    if severity <= mavlink.MAV_SEVERITY_ERROR:
+        return "ERROR"
+    if severity <= mavlink.MAV_SEVERITY_WARNING:
+        return "WARNING"
+    return "INFO"
