@@ -47,6 +47,9 @@ N = TypeVar("N")
 
 #: Start-order graph nodes: ("capability", name) or ("process", name).
 Node = tuple[str, str]
+#: A behavior's capability k must follow this many earlier ones directly (all of them in
+#: any real catalog); beyond that the order is implied through the chain.
+_PAIRWISE_LIMIT = 16
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,6 +70,8 @@ class OrderEdge:
     by: str
     reason: str
     mark: Mark
+    #: True for "a capability is up once its last process runs": implied, not authored.
+    implied: bool = False
 
 
 def node_label(node: Node) -> str:
@@ -396,49 +401,83 @@ class CatalogGraphs:
     # -- start order ---------------------------------------------------------------------
     @cached_property
     def start_order_graph(self) -> nx.DiGraph:
-        """Edges carry `why`: the OrderEdge that imposes them (first one found)."""
+        """What must start before what. Nodes: ("process", p), and ("capability", C)
+        meaning "C is up" (all its processes run). Edges carry `why` (an OrderEdge):
+
+        * a capability's processes in their order, the last one before the capability
+          is up;
+        * a behavior's capabilities in their order: the previous capability is up
+          before the next one's first process *that is not already running* (processes
+          shared with earlier capabilities start only once);
+        * a required capability is up before the first (not yet running) process of the
+          capability that requires it.
+        """
         graph = nx.DiGraph()
         capabilities = self.catalog.capabilities
-        in_requires_cycle: dict[str, frozenset[str]] = {}
+        requires_scc: dict[str, frozenset[str]] = {}
         for scc in self.requires_cycles:
             for name in scc:
-                in_requires_cycle[name] = scc
+                requires_scc[name] = scc
 
         def add(u: Node, v: Node, why: OrderEdge) -> None:
             if u != v and not graph.has_edge(u, v):
                 graph.add_edge(u, v, why=why)
 
-        def last(name: str) -> Node:
-            spec = capabilities[name]
-            if spec.processes:
-                return ("process", spec.processes[-1])
+        def processes(name: str) -> tuple[str, ...]:
+            return tuple(dict.fromkeys(capabilities[name].processes))
+
+        def running_after(name: str) -> set[str]:
+            """Processes running once `name` is up (with what it requires)."""
+            running: set[str] = set()
+            for capability in self.closure(name) or (name,):
+                running.update(processes(capability))
+            return running
+
+        def entry(name: str, running: set[str]) -> Node:
+            for process in processes(name):
+                if process not in running:
+                    return ("process", process)
             return ("capability", name)
 
         for name, spec in capabilities.items():
-            graph.add_node(("capability", name))
-            previous: Node = ("capability", name)
-            seen: set[str] = set()
+            up: Node = ("capability", name)
+            graph.add_node(up)
+            previous: str | None = None
             for index, process in enumerate(spec.processes):
-                if process in seen:
+                if process == previous or process in spec.processes[:index]:
                     continue
-                seen.add(process)
-                node: Node = ("process", process)
-                reason = (
-                    f"capability {name} starts with process {process}"
-                    if previous[0] == "capability"
-                    else f"capability {name} starts {previous[1]} before {process}"
+                if previous is not None:
+                    add(
+                        ("process", previous),
+                        ("process", process),
+                        OrderEdge(
+                            "capability",
+                            name,
+                            f"capability {name} starts {previous} before {process}",
+                            spec.mark_of(f"processes.{index}"),
+                        ),
+                    )
+                previous = process
+            if previous is not None:
+                add(
+                    ("process", previous),
+                    up,
+                    OrderEdge(
+                        "capability",
+                        name,
+                        f"capability {name} is up once {previous} runs",
+                        spec.mark_of(f"processes.{spec.processes.index(previous)}"),
+                        implied=True,
+                    ),
                 )
-                add(previous, node, OrderEdge("capability", name, reason, _pmark(spec, index)))
-                previous = node
             for index, required in enumerate(spec.required_capabilities):
                 if required not in capabilities:
                     continue
-                scc = in_requires_cycle.get(name)
-                if scc is not None and required in scc:
+                if required in requires_scc.get(name, ()):
                     continue  # a requires-cycle is its own finding (AX502)
                 add(
-                    last(required),
-                    ("capability", name),
+                    ("capability", required),
+                    entry(name, running_after(required)),
                     OrderEdge(
                         "capability",
                         name,
@@ -447,27 +486,27 @@ class CatalogGraphs:
                     ),
                 )
         for name, behavior in self.catalog.behaviors.items():
-            previous_cap: str | None = None
-            listed: set[str] = set()
+            # Every earlier capability before every later one (not only neighbours),
+            # so that a reported cycle is as short as the contradiction itself.
+            earlier: list[str] = []
+            running: set[str] = set()
             for index, capability in enumerate(behavior.capabilities):
-                if capability in listed:
+                if capability not in capabilities or capability in behavior.capabilities[:index]:
                     continue
-                listed.add(capability)
-                if capability not in capabilities:
-                    previous_cap = None
-                    continue
-                if previous_cap is not None:
+                target = entry(capability, running)
+                for before in earlier[-_PAIRWISE_LIMIT:]:
                     add(
-                        last(previous_cap),
-                        ("capability", capability),
+                        ("capability", before),
+                        target,
                         OrderEdge(
                             "behavior",
                             name,
-                            f"behavior {name} lists {previous_cap} before {capability}",
+                            f"behavior {name} lists {before} before {capability}",
                             behavior.mark_of(f"capabilities.{index}"),
                         ),
                     )
-                previous_cap = capability
+                running |= running_after(capability)
+                earlier.append(capability)
         return graph
 
     def node_order(self, node: Node) -> tuple[int, int, str]:

@@ -185,7 +185,7 @@ def parse_mission(text: str, file: str = "<mission>") -> MissionScript:
     return MissionScript(file, calls)
 
 
-def _mark(file: str, lines: Sequence[str], node: ast.expr) -> Mark:
+def _mark(file: str, lines: Sequence[str], node: ast.expr | ast.keyword) -> Mark:
     """1-based line and character column (ast counts UTF-8 bytes)."""
     line = node.lineno
     offset = node.col_offset
@@ -236,7 +236,7 @@ def _call(node: ast.Call, function: str, file: str, lines: Sequence[str]) -> Mis
                 for key, value in zip(keyword.value.keys, keyword.value.values, strict=True):
                     if isinstance(key, ast.Constant) and isinstance(key.value, str):
                         arguments.append(
-                            CallArgument(key.value, _literal(value), _mark(file, lines, value))
+                            CallArgument(key.value, _literal(value), _mark(file, lines, key))
                         )
             continue
         if keyword.arg in ("name", "behavior") and behavior is None and not node.args:
@@ -245,7 +245,7 @@ def _call(node: ast.Call, function: str, file: str, lines: Sequence[str]) -> Mis
                 name_mark = _mark(file, lines, keyword.value)
             continue
         arguments.append(
-            CallArgument(keyword.arg, _literal(keyword.value), _mark(file, lines, keyword.value))
+            CallArgument(keyword.arg, _literal(keyword.value), _mark(file, lines, keyword))
         )
     return MissionCall(
         MISSION_CALLS[function],

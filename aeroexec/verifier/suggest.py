@@ -23,6 +23,21 @@ CUTOFF = 0.8
 _POSTINGS_BUDGET = 8_000
 
 
+def _small_difference(a: str, b: str) -> bool:
+    """Past their common prefix and suffix, do the names differ only a little? Keeps
+    `SELF_LOCALIZE_BY_LIDAR` from suggesting `SELF_LOCALIZE_BY_ODOMETRY`."""
+    start = 0
+    while start < min(len(a), len(b)) and a[start] == b[start]:
+        start += 1
+    end = 0
+    while end < min(len(a), len(b)) - start and a[-1 - end] == b[-1 - end]:
+        end += 1
+    rest_a, rest_b = a[start : len(a) - end], b[start : len(b) - end]
+    if max(len(rest_a), len(rest_b)) <= 3:
+        return True
+    return difflib.SequenceMatcher(None, rest_a, rest_b).ratio() >= 0.5
+
+
 def _trigrams(word: str) -> set[str]:
     padded = f"  {word.casefold()} "
     return {padded[i : i + 3] for i in range(len(padded) - 2)}
@@ -57,22 +72,21 @@ class Suggester:
             return folded
         pool = self.names if len(self.names) <= SMALL_POOL else self._shortlist(word)
         candidates = {n.casefold(): n for n in reversed(pool) if n != word}
-        close = difflib.get_close_matches(word.casefold(), list(candidates), n=1, cutoff=CUTOFF)
-        if close:
-            return candidates[close[0]]
+        wanted = word.casefold()
+        for close in difflib.get_close_matches(wanted, list(candidates), n=3, cutoff=CUTOFF):
+            if _small_difference(wanted, close):
+                return candidates[close]
         return self._by_prefix(word)
 
     def _by_prefix(self, word: str) -> str | None:
-        """A known name that `word` extends (or that extends `word`) at a `_` boundary."""
+        """A known name of two or more words that `word` extends at a `_` boundary
+        (`PAY_ATTENTION_TO_VISUAL_MARKERS` -> `PAY_ATTENTION`; `LAND_ON_...` does not
+        suggest `LAND`)."""
         parts = word.split("_")
-        for cut in range(len(parts) - 1, 0, -1):
+        for cut in range(len(parts) - 1, 1, -1):
             candidate = "_".join(parts[:cut])
-            if len(candidate) >= 4 and candidate in self._known:
+            if candidate in self._known:
                 return candidate
-        if len(self.names) <= SMALL_POOL:
-            longer = [n for n in self.names if n.startswith(word + "_")]
-            if longer:
-                return min(longer, key=len)
         return None
 
     def _shortlist(self, word: str) -> list[str]:

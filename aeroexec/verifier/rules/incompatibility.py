@@ -7,7 +7,7 @@ from collections.abc import Iterator
 import networkx as nx
 
 from aeroexec.catalog.model import Severity
-from aeroexec.verifier.findings import Finding
+from aeroexec.verifier.findings import Finding, Witness
 from aeroexec.verifier.graphs import CatalogGraphs, cycle_edges, shortest_cycle
 from aeroexec.verifier.registry import catalog_rule
 from aeroexec.verifier.witness import coexistence_witness
@@ -30,24 +30,59 @@ def _names(names: tuple[str, ...] | list[str]) -> str:
     """Behavior A preempts behavior B (B is in one of A's `incompatible_lists`) but B
     does not preempt A. In flight: the outcome depends on activation order —
     activating A stops B, but activating B while A runs leaves both running (the
-    witness shows that order). Fix: make the relation symmetric (put A in a list that
-    B names, typically by having both name the same list), or document why A alone
-    must win.""",
+    witness shows that order). Reported once per behavior that preempts nothing back
+    (typically a behavior added to a list without `incompatible_lists` of its own),
+    otherwise once per preempting behavior. Fix: make the relation symmetric (put A in
+    a list that B names, typically by having both name the same list), or document why
+    A alone must win.""",
     witness=True,
 )
 def asymmetric_incompatibility(graphs: CatalogGraphs) -> Iterator[Finding]:
     catalog = graphs.catalog
-    for a, victims in graphs.asymmetric_preemption.items():
+    order = catalog.order_of
+    one_sided = graphs.asymmetric_preemption
+    # Behaviors that preempt nothing (but themselves) are reported as victims, once.
+    inert = {
+        b
+        for victims in one_sided.values()
+        for b in victims
+        if not (catalog.preempted_by(b) & catalog.behaviors.keys()) - {b}
+    }
+    attackers: dict[str, list[str]] = {}
+    for a, victims in one_sided.items():
+        for b in victims:
+            if b in inert:
+                attackers.setdefault(b, []).append(a)
+    for b in sorted(attackers, key=order):
+        preemptors = sorted(attackers[b], key=order)
+        descriptor = catalog.behaviors[b]
+        mark = descriptor.mark_of("incompatible_lists")
+        lists = sorted(
+            {
+                lst
+                for a in preemptors
+                if (found := graphs.preempting_list(a, b))
+                for lst in found[1:]
+            }
+        )
+        plural = len(preemptors) > 1
+        yield graphs.finding(
+            "AX401",
+            W,
+            f"{b} is preempted by {_names(preemptors)} (list {', '.join(lists)}) but "
+            f"{'preempts none of them' if plural else 'does not preempt it'}: activated "
+            f"after {'one of them' if plural else preemptors[0]}, {b} runs beside it",
+            mark,
+            (b, *preemptors),
+            _witness(graphs, [(a, b) for a in preemptors]),
+        )
+    for a, all_victims in one_sided.items():
+        victims = tuple(b for b in all_victims if b not in inert)
+        if not victims:
+            continue
         descriptor = catalog.behaviors[a]
         through = graphs.preempting_list(a, victims[0])
         index, list_name = through if through is not None else (0, "")
-        witness = None
-        if a in graphs.activatable:
-            for b in victims:
-                if b in graphs.activatable:
-                    witness = coexistence_witness(graphs.model, a, b)
-                    if witness is not None:
-                        break
         plural = len(victims) > 1
         message = (
             f"{a} preempts {_names(victims)} (list {list_name}) but "
@@ -60,8 +95,18 @@ def asymmetric_incompatibility(graphs: CatalogGraphs) -> Iterator[Finding]:
             message,
             descriptor.mark_of(f"incompatible_lists.{index}"),
             (a, *victims),
-            witness,
+            _witness(graphs, [(a, b) for b in victims]),
         )
+
+
+def _witness(graphs: CatalogGraphs, pairs: list[tuple[str, str]]) -> Witness | None:
+    """Both running, for the first (preemptor, victim) pair where that can happen."""
+    for a, b in pairs:
+        if a in graphs.activatable and b in graphs.activatable:
+            witness = coexistence_witness(graphs.model, a, b)
+            if witness is not None:
+                return witness
+    return None
 
 
 @catalog_rule(
@@ -125,7 +170,9 @@ def dead_list(graphs: CatalogGraphs) -> Iterator[Finding]:
         hint = ""
         if name in misspelt:
             wrong = misspelt[name][0]
-            hint = f" ({_names(named[wrong])} name '{wrong}': a misspelling of it?)"
+            namers = named[wrong]
+            verb = "names" if len(namers) == 1 else "name"
+            hint = f" ({_names(namers)} {verb} '{wrong}': a misspelling of it?)"
         yield graphs.finding(
             "AX403",
             W,

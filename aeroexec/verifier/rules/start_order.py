@@ -45,8 +45,8 @@ def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
         cycle = shortest_cycle(graph, component, graphs.node_order)
         reasons: list[OrderEdge] = [graph.edges[u, v]["why"] for u, v in cycle_edges(cycle)]
         shown = " -> ".join(node_label(n) for n in cycle)
-        because = "; ".join(dict.fromkeys(r.reason for r in reasons))
-        imposers = list(dict.fromkeys(r.by for r in reasons))
+        because = "; ".join(dict.fromkeys(r.reason for r in reasons if not r.implied))
+        imposers = list(dict.fromkeys(r.by for r in reasons if not r.implied))
         members = sorted(component, key=graphs.node_order)
         # The edge a behavior imposes is the most likely to be "the wrong one".
         anchor = next((r for r in reasons if r.by_kind == "behavior"), reasons[0])

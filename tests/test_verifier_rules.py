@@ -1,0 +1,103 @@
+"""Every rule of the registry has a fixture that triggers it, at the places the fixture
+marks with `# expect CODE [at TOKEN]` comments (line, and the column where TOKEN starts),
+and a clean near-miss fixture where it stays silent."""
+
+from __future__ import annotations
+
+import re
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+
+from aeroexec.catalog import read_catalog
+from aeroexec.catalog.model import Severity
+from aeroexec.verifier import Finding, Rule, all_rules, check_catalog, check_mission
+from aeroexec.verifier.missions import read_mission
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures" / "verifier"
+RULES = FIXTURES / "rules"
+MISSIONS = FIXTURES / "missions"
+MISSION_CATALOG = MISSIONS / "catalog.yaml"
+#: Rules that fire on every catalog (the dialect note): they have no clean fixture.
+ALWAYS = {"AX109"}
+
+EXPECT = re.compile(r"expect\s+(AX\d{3})(?:\s+at\s+(\S+))?")
+
+Place = tuple[int, int | None]
+
+
+def expectations(path: Path) -> dict[str, set[Place]]:
+    """code -> {(line, column or None)} from the fixture's `# expect` comments."""
+    expected: dict[str, set[Place]] = defaultdict(set)
+    for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
+        code_part, _, comment = line.partition("# expect")
+        if not comment:
+            continue
+        for match in EXPECT.finditer("expect" + comment):
+            code, token = match.groups()
+            column = code_part.index(token) + 1 if token else None
+            expected[code].add((number, column))
+    return expected
+
+
+def fixture_for(rule: Rule, clean: bool = False) -> Path:
+    if rule.kind == "mission":
+        return MISSIONS / f"{rule.code}{'.clean' if clean else ''}.py"
+    path = RULES / f"{rule.code}{'.clean' if clean else ''}.yaml"
+    if clean and not path.exists():
+        return RULES / "clean.yaml"
+    return path
+
+
+def findings_of(path: Path) -> list[Finding]:
+    if path.suffix == ".py":
+        return check_mission(read_mission(path), read_catalog(MISSION_CATALOG))
+    return check_catalog(read_catalog(path))
+
+
+def _ids(rule: Rule) -> str:
+    return rule.code
+
+
+@pytest.mark.parametrize("rule", all_rules(), ids=_ids)
+def test_rule_fires_exactly_where_the_fixture_says(rule: Rule) -> None:
+    path = fixture_for(rule)
+    assert path.exists(), f"every rule needs a fixture: {path.name} is missing"
+    expected = expectations(path)[rule.code]
+    assert expected, f"{path.name} marks no '# expect {rule.code}' place"
+    found = [f for f in findings_of(path) if f.rule == rule.code]
+    assert found, f"{rule.code} did not fire on {path.name}"
+    places = {(f.line, f.column) for f in found}
+    lines_only = {line for line, column in expected if column is None}
+    wanted = {p for p in expected if p[1] is not None}
+    got_with_columns = {p for p in places if p[0] not in lines_only}
+    assert got_with_columns == wanted, "\n".join(str(f) for f in found)
+    assert {line for line, _ in places if line in lines_only} == lines_only
+    for finding in found:
+        assert finding.file == str(path)
+        if rule.severity is not None:
+            assert finding.severity is rule.severity
+        if rule.kind != "loader":
+            assert finding.subjects, f"{finding} names no subject"
+
+
+@pytest.mark.parametrize("rule", [r for r in all_rules() if r.code not in ALWAYS], ids=_ids)
+def test_rule_is_silent_on_its_clean_fixture(rule: Rule) -> None:
+    path = fixture_for(rule, clean=True)
+    assert path.exists(), f"every rule needs a clean fixture: {path.name} is missing"
+    findings = findings_of(path)
+    assert [str(f) for f in findings if f.rule == rule.code] == []
+    assert [str(f) for f in findings if f.severity is Severity.ERROR] == []
+
+
+def test_the_shared_clean_catalog_has_nothing_above_info() -> None:
+    findings = findings_of(RULES / "clean.yaml")
+    assert [str(f) for f in findings if f.severity is not Severity.INFO] == []
+    assert {f.rule for f in findings} == {"AX109"}
+
+
+def test_every_fixture_belongs_to_a_registered_rule() -> None:
+    codes = {rule.code for rule in all_rules()}
+    for path in [*RULES.glob("AX*"), *MISSIONS.glob("AX*")]:
+        assert path.name[:5] in codes, f"{path.name} names no registered rule"

@@ -1,0 +1,193 @@
+"""Witnesses replay in the real executive core and make the problem happen.
+
+Every finding with a witness (from the rule fixtures, from the real catalogs and from
+generated catalogs) is replayed step by step against `aeroexec.executive.Executive`:
+the outcome the verifier predicts is the outcome the executive produces. Near-miss
+catalogs show the same steps succeeding once the defect is repaired.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from aeroexec.catalog import read_catalog
+from aeroexec.catalog.loader import parse_catalog
+from aeroexec.catalog.model import Catalog
+from aeroexec.executive import Executive
+from aeroexec.verifier import Finding, Outcome, Witness, check_catalog
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+RULES = FIXTURES / "verifier" / "rules"
+REAL = FIXTURES / "verifier_catalogs"
+
+
+def replay(catalog: Catalog, witness: Witness) -> Executive:
+    """Run the witness; assert the executive does what the witness says.
+
+    Witnesses are about the catalog, so they are replayed with the generic behavior
+    implementation (`library={}`): a library behavior's own situation check (LAND
+    needs the drone flying) is not what the verifier predicts.
+    """
+    executive = Executive(catalog, library={})
+    if witness.outcome is Outcome.INITIATION_FAILS:
+        assert witness.steps == ()
+        assert not executive.initiation.ok, "initiation was expected to fail"
+        assert executive.initiation.error
+        return executive
+    assert executive.initiation.ok, executive.initiation.error
+    *prefix, last = witness.steps
+    for step in prefix:
+        result = executive.activate_behavior(step.activate, dict(step.arguments))
+        assert result.ok, f"step {step.activate} was rejected: {result.error}"
+        assert step.activate in executive.active_behaviors
+    result = executive.activate_behavior(last.activate, dict(last.arguments))
+    if witness.outcome is Outcome.REJECTED:
+        assert not result.ok, f"{last.activate} was accepted; active: {executive.active_behaviors}"
+        assert result.error
+        assert last.activate not in executive.active_behaviors
+    else:
+        assert result.ok, result.error
+        for step in witness.steps:
+            assert step.activate in executive.active_behaviors
+    return executive
+
+
+def witnessed(findings: list[Finding]) -> list[Finding]:
+    return [f for f in findings if f.witness is not None]
+
+
+FIXTURE_CATALOGS = sorted(p for p in RULES.glob("AX*.yaml") if ".clean" not in p.name)
+WITNESSED = [
+    (path, finding)
+    for path in FIXTURE_CATALOGS
+    for finding in witnessed(check_catalog(read_catalog(path)))
+]
+
+
+def test_every_witness_rule_has_a_witnessed_fixture_finding() -> None:
+    from aeroexec.verifier import all_rules
+
+    with_witness = {r.code for r in all_rules() if r.witness}
+    assert with_witness == {"AX203", "AX205", "AX301", "AX302", "AX303", "AX304", "AX401", "AX502"}
+    assert {f.rule for _, f in WITNESSED} == with_witness
+
+
+@pytest.mark.parametrize(
+    ("path", "finding"),
+    WITNESSED,
+    ids=[f"{p.stem}:{f.line}" for p, f in WITNESSED],
+)
+def test_fixture_witness_replays_in_the_executive(path: Path, finding: Finding) -> None:
+    assert finding.witness is not None
+    replay(read_catalog(path), finding.witness)
+
+
+def test_witnesses_are_shortest() -> None:
+    by_rule: dict[str, set[int]] = {}
+    for _, finding in WITNESSED:
+        assert finding.witness is not None
+        by_rule.setdefault(finding.rule, set()).add(len(finding.witness.steps))
+    assert by_rule["AX302"] == {0}
+    for code in ("AX203", "AX205", "AX301", "AX303", "AX502"):
+        assert by_rule[code] == {1}, code
+    assert by_rule["AX304"] == {2}
+    assert by_rule["AX401"] == {2}
+
+
+def test_witness_json_shape() -> None:
+    finding = next(f for _, f in WITNESSED if f.rule == "AX304")
+    assert finding.to_dict()["witness"] == [
+        {"activate": "GO_TO", "arguments": {}},
+        {"activate": "FOLLOW", "arguments": {}},
+    ]
+
+
+def test_repaired_catalog_accepts_the_same_steps() -> None:
+    """The AX304 witness against its clean near-miss: FOLLOW preempts GO_TO cleanly."""
+    executive = Executive(read_catalog(RULES / "AX304.clean.yaml"), library={})
+    assert executive.activate_behavior("GO_TO").ok
+    assert executive.activate_behavior("FOLLOW").ok
+    assert executive.active_behaviors == ("FOLLOW",)
+
+
+def test_repaired_defaults_initiate() -> None:
+    assert Executive(read_catalog(RULES / "AX302.clean.yaml"), library={}).initiation.ok
+
+
+def test_asymmetric_witness_order_matters() -> None:
+    """AX401's witness leaves both running; the opposite order preempts."""
+    catalog = read_catalog(RULES / "AX401.yaml")
+    executive = Executive(catalog, library={})
+    assert executive.activate_behavior("GO_TO").ok
+    assert executive.activate_behavior("DOCK").ok
+    assert "GO_TO" not in executive.active_behaviors
+
+
+@pytest.mark.parametrize("path", sorted(REAL.glob("*.yaml")), ids=lambda p: p.name[:60])
+def test_real_catalog_witnesses_replay(path: Path) -> None:
+    from aeroexec.errors import CatalogError
+
+    try:
+        catalog = read_catalog(path)
+    except CatalogError:
+        pytest.skip("not a behavior catalog (refused by the loader)")
+    for finding in witnessed(check_catalog(catalog)):
+        assert finding.witness is not None
+        replay(catalog, finding.witness)
+
+
+# -- generated catalogs: the verifier's model and the executive agree ---------------------
+NAMES = [f"B{i}" for i in range(6)]
+LISTS = [f"l{i}" for i in range(3)]
+CAPS = [f"C{i}" for i in range(5)]
+
+
+@st.composite
+def small_catalogs(draw: st.DrawFn) -> str:
+    """Thesis-dialect catalogs with generic behavior names (so the executive uses its
+    generic behavior), random lists, capabilities, conflicts, requirements, defaults
+    and a few dangling references."""
+    behaviors = draw(st.lists(st.sampled_from(NAMES), min_size=1, max_size=6, unique=True))
+    lines = ["behavior_descriptors:"]
+    for name in behaviors:
+        lists = draw(st.lists(st.sampled_from([*LISTS, "lx"]), max_size=2, unique=True))
+        caps = draw(st.lists(st.sampled_from([*CAPS, "CX"]), max_size=3, unique=True))
+        recurrent = draw(st.booleans())
+        lines += [
+            f"  - behavior: {name}",
+            "    timeout: 10",
+            f"    recurrent: {'yes' if recurrent else 'no'}",
+            f"    incompatible_lists: [{', '.join(lists)}]",
+            f"    capabilities: [{', '.join(caps)}]",
+        ]
+    lines.append("behavior_lists:")
+    for list_name in LISTS:
+        members = draw(st.lists(st.sampled_from([*NAMES, "BX"]), max_size=4, unique=True))
+        lines += [f"  - list: {list_name}", f"    behaviors: [{', '.join(members)}]"]
+    lines.append("capability_descriptors:")
+    for cap in CAPS:
+        others = [c for c in CAPS if c != cap]
+        conflicts = draw(st.lists(st.sampled_from(others), max_size=2, unique=True))
+        required = draw(st.lists(st.sampled_from([*others, "CY"]), max_size=1, unique=True))
+        default = draw(st.integers(0, 9)) == 0
+        lines += [
+            f"  - capability: {cap}",
+            f"    active_by_default: {'yes' if default else 'no'}",
+            f"    processes: [p_{cap.lower()}]",
+            f"    incompatible_capabilities: [{', '.join(conflicts)}]",
+            f"    required_capabilities: [{', '.join(required)}]",
+        ]
+    return "\n".join(lines) + "\n"
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(small_catalogs())
+def test_generated_catalog_witnesses_replay(text: str) -> None:
+    catalog = parse_catalog(text, "generated.yaml")
+    for finding in witnessed(check_catalog(catalog)):
+        assert finding.witness is not None
+        replay(catalog, finding.witness)
