@@ -21,7 +21,7 @@ from mcap.records import Schema
 from aeroexec.errors import RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
-from aeroexec.recording import Recorder
+from aeroexec.recording import FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
 from aeroexec.recording.scan import RecordScanner
 from aeroexec.recording.schemas import SCHEMAS
 from aeroexec.recording.writer import LIBRARY
@@ -304,6 +304,28 @@ def test_unclosed_recorder_is_completed_at_normal_exit(tmp_path: Path) -> None:
         summary = make_reader(stream).get_summary()
     assert summary is not None and summary.statistics is not None
     assert summary.statistics.message_count == 7
+
+
+def test_chunks_respect_the_flush_bound(session_file: Path) -> None:
+    with open(session_file, "rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None and summary.statistics is not None
+    chunks = summary.chunk_indexes
+    assert chunks and all(c.compression == "lz4" for c in chunks)
+    assert len(chunks) >= summary.statistics.message_count / FLUSH_MESSAGES
+    for chunk in chunks:
+        assert chunk.message_end_time - chunk.message_start_time <= FLUSH_INTERVAL_NS
+
+
+def test_service_call_with_nan_is_still_valid_json(tmp_path: Path) -> None:
+    path = tmp_path / "nan-call.mcap"
+    record = ServiceCallRecord(
+        0, None, "mission", "activate_behavior", {"x": float("inf")}, {"ok": True, "error": ""}, 0
+    )
+    with Recorder(path) as recorder:
+        recorder.on_service_call(record)
+    ((_, _, _, data),) = _decoded(path)
+    assert data["request"] == {"x": None}
 
 
 # -- lifecycle and errors ---------------------------------------------------------------------
