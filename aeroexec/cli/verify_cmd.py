@@ -22,8 +22,9 @@ Every catalog is read leniently (all problems reported, not just the first) and
 checked by the rules of the registry: dangling references, capability conflicts that
 stop behaviors or initiation, one-sided incompatibilities, start-order cycles,
 recurrent/timeout contradictions, dead lists and capabilities. Mission scripts given
-with --mission are read with Python's ast (never run) and every execute/activate/
-inhibit call with literal arguments is checked against each catalog.
+with --mission are read with Python's ast (never run); every execute, activate and
+inhibit call with literal arguments is checked against each catalog. Every input is
+read before any check runs: an unreadable one stops the run with exit code 2.
 
 \b
 Examples:
@@ -112,6 +113,8 @@ def verify_command(
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
     report = verify(_expand_catalogs(catalogs), mission)
     shown = report.at_least(threshold)
-    typer.echo(render(shown, output_format, witness=witness, color=_use_color(color)), nl=False)
+    use_color = _use_color(color)
+    text = render(shown, output_format, witness=witness, color=use_color)
+    typer.echo(text, nl=False, color=use_color)
     # The exit code counts every finding, shown or not.
     raise typer.Exit(report.exit_code(strict))

@@ -177,7 +177,7 @@ def parse_mission(text: str, file: str = "<mission>") -> MissionScript:
     except SyntaxError as exc:
         line = exc.lineno or 0
         column = exc.offset or 0
-        raise MissionError(f"invalid Python syntax: {exc.msg}", Mark(file, line, column)) from None
+        raise MissionError(f"not valid Python: {exc.msg}", Mark(file, line, column)) from None
     except ValueError as exc:  # e.g. NUL bytes
         raise MissionError(f"cannot parse: {exc}", Mark(file)) from None
     lines = text.splitlines()
