@@ -1,0 +1,199 @@
+"""`write_view`: one or two aeroexec recordings into one Rerun `.rrd` file.
+
+    report = write_view(["flight.mcap"], "flight.rrd")
+    report = write_view(["base.mcap", "replay.mcap"], "diff.rrd")   # under /base and /new
+
+Each input is checked first (readable MCAP, aeroexec profile, at least one message), so
+nothing is written for a bad input. The output holds one Rerun recording, application
+`aeroexec`, whose recording id is derived from the inputs' contents (the same inputs give
+the same id), with the blueprint of blueprint.py as its default layout. Only a recording
+stream created here is used, never Rerun's global one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import uuid
+from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager, nullcontext
+from dataclasses import dataclass
+from pathlib import Path
+
+import rerun as rr
+
+from aeroexec.errors import Mark, RecordingError
+from aeroexec.recording.reader import Recording, open_recording
+from aeroexec.recording.schemas import PROFILE
+from aeroexec.viz.blueprint import build_blueprint
+from aeroexec.viz.columns import ColumnWriter
+from aeroexec.viz.convert import PROGRESS_EVERY, ConvertStats, SessionConverter, session_origin_ns
+from aeroexec.viz.layout import Layout, layouts_for
+from aeroexec.viz.progress import Advance
+from aeroexec.viz.scene import (
+    log_vehicle_body,
+    log_view_coordinates,
+    log_world,
+    recorded_world,
+    trajectory_color,
+)
+
+APPLICATION_ID = "aeroexec"
+RRD_SUFFIX = ".rrd"
+
+#: `progress(description, total)` -> a context manager yielding `advance(n)`.
+ProgressFactory = Callable[[str, int], AbstractContextManager[Advance]]
+
+
+@dataclass(frozen=True, slots=True)
+class SourceReport:
+    file: str
+    root: str
+    complete: bool
+    problem: str | None
+    messages: int
+    stats: ConvertStats
+    notes: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ViewReport:
+    output: Path
+    recording_id: str
+    sources: tuple[SourceReport, ...]
+
+
+def default_output(recording: str | os.PathLike[str]) -> Path:
+    """`<REC stem>.rrd` next to the recording."""
+    return Path(recording).with_suffix(RRD_SUFFIX)
+
+
+def open_session(path: str | os.PathLike[str]) -> Recording:
+    """Open an aeroexec recording to view; `RecordingError` (one line) for anything else."""
+    recording = open_recording(path)
+    where = Mark(str(path))
+    if recording.profile != PROFILE:
+        profile = recording.profile or "none"
+        raise RecordingError(
+            f"not an aeroexec recording (profile {profile}); `aeroexec info` lists its channels",
+            where,
+        )
+    survey = recording.survey()
+    if survey.message_count == 0:
+        why = f": {survey.end.problem}" if survey.end.problem else ""
+        raise RecordingError(f"no messages could be read{why}", where)
+    return recording
+
+
+def recording_id_for(paths: Sequence[str | os.PathLike[str]]) -> str:
+    """A UUID derived from the inputs' bytes (and their order)."""
+    digest = hashlib.sha256(b"aeroexec view\0")
+    for path in paths:
+        file_hash = hashlib.sha256()
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                file_hash.update(block)
+        digest.update(file_hash.digest())
+    return str(uuid.UUID(bytes=digest.digest()[:16], version=4))
+
+
+def _check_output(output: Path, inputs: Sequence[Path]) -> None:
+    where = Mark(str(output))
+    if output.is_dir():
+        raise RecordingError("is a directory; give a file name ending in .rrd", where)
+    parent = output.parent if str(output.parent) else Path(".")
+    if not parent.is_dir():
+        raise RecordingError(f"cannot write: no directory {parent}", where)
+    if not os.access(parent, os.W_OK):
+        raise RecordingError(f"cannot write: directory {parent} is not writable", where)
+    for source in inputs:
+        if output.exists() and source.exists() and output.samefile(source):
+            raise RecordingError("would overwrite its own input", where)
+
+
+def _no_progress(description: str, total: int) -> AbstractContextManager[Advance]:
+    return nullcontext(lambda n: None)
+
+
+def write_view(
+    recordings: Sequence[str | os.PathLike[str]],
+    output: str | os.PathLike[str],
+    *,
+    progress: ProgressFactory | None = None,
+) -> ViewReport:
+    """Convert one recording, or two side by side, into the `.rrd` file `output`."""
+    inputs = [Path(p) for p in recordings]
+    opened = [open_session(p) for p in inputs]
+    out = Path(output)
+    _check_output(out, inputs)
+    labels = [Path(r.name).name for r in opened]
+    layouts = layouts_for(labels)
+    recording_id = recording_id_for(inputs)
+
+    stream = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id, send_properties=False)
+    stream.set_log_time_enabled(False)  # no wall-clock timeline: same input, same rows
+    stream.set_log_tick_enabled(False)
+    stream.save(str(out), default_blueprint=build_blueprint(layouts))
+    stream.send_recording_name(" vs ".join(labels))
+    log_view_coordinates(stream)
+    writer = ColumnWriter(stream)
+    sources = []
+    for index, (recording, layout) in enumerate(zip(opened, layouts, strict=True)):
+        stats = _convert(stream, writer, recording, layout, index, progress or _no_progress)
+        survey = recording.survey()
+        notes = list(stats.notes) + list(recording.notes)
+        sources.append(
+            SourceReport(
+                file=recording.name,
+                root=layout.origin,
+                complete=survey.end.complete,
+                problem=survey.end.problem,
+                messages=survey.message_count,
+                stats=stats,
+                notes=tuple(notes),
+            )
+        )
+    stream.flush()
+    stream.disconnect()
+    return ViewReport(out, recording_id, tuple(sources))
+
+
+def _convert(
+    stream: rr.RecordingStream,
+    writer: ColumnWriter,
+    recording: Recording,
+    layout: Layout,
+    index: int,
+    progress: ProgressFactory,
+) -> ConvertStats:
+    color = trajectory_color(index)
+    # The session's metadata (seed, catalog, world, ...) as a recording property.
+    facts = {"file": Path(recording.name).name, **recording.metadata.get("aeroexec", {})}
+    stream.send_property(layout.root or "session", rr.AnyValues(**facts))
+    world, world_note = recorded_world(recording)
+    if world is not None:
+        log_world(stream, layout, world)
+    log_vehicle_body(stream, layout, color)
+    survey = recording.survey()
+    has_pose = any(c.topic.endswith("/vehicle/pose") for c in survey.channels.values())
+    converter = SessionConverter(
+        stream,
+        writer,
+        layout,
+        origin_ns=session_origin_ns(recording),
+        world=world,
+        color=color,
+        pose_from_state=not has_pose,
+    )
+    with progress(recording.name, survey.message_count) as advance:
+        count = 0
+        for record in recording.records():
+            converter.feed(record)
+            count += 1
+            if count % PROGRESS_EVERY == 0:
+                advance(PROGRESS_EVERY)
+        advance(count % PROGRESS_EVERY)
+    stats = converter.finish()
+    if world_note:
+        stats.notes.append(world_note)
+    return stats
