@@ -1,0 +1,123 @@
+"""`aeroexec view REC [REC2]`: a recording (or two side by side) in the Rerun viewer."""
+
+from __future__ import annotations
+
+from contextlib import AbstractContextManager
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.viz.progress import Advance, progress_bar
+from aeroexec.viz.view import RRD_SUFFIX, ViewReport, default_output, write_view
+from aeroexec.viz.viewer import cannot_spawn, open_viewer
+
+
+def _default_output(base: Path, new: Path | None) -> Path:
+    if new is None:
+        return default_output(base)
+    return base.with_name(f"{base.stem}_vs_{new.stem}{RRD_SUFFIX}")
+
+
+def _progress(description: str, total: int) -> AbstractContextManager[Advance]:
+    return progress_bar(f"converting {description}", total)
+
+
+def _summary(report: ViewReport) -> None:
+    for source in report.sources:
+        stats = source.stats
+        where = f" under {source.root}" if source.root != "/" else ""
+        typer.echo(
+            f"{source.file}{where}: {stats.records} messages, {stats.vehicle_states} vehicle "
+            f"states, {stats.behavior_events} behavior events, {stats.rejections} rejected, "
+            f"{len(stats.behaviors)} behaviors, {len(stats.capabilities)} capabilities"
+        )
+        if not source.complete:
+            error_line(
+                f"{source.file}: warning: incomplete recording: {source.problem}; "
+                f"shown up to there (run `aeroexec recover` for a complete copy)"
+            )
+        for note in source.notes:
+            error_line(f"{source.file}: note: {note}")
+
+
+@app.command("view")
+@guarded
+def view(
+    recording: Annotated[
+        Path,
+        typer.Argument(metavar="REC", help="An aeroexec recording (MCAP).", show_default=False),
+    ],
+    other: Annotated[
+        Path | None,
+        typer.Argument(
+            metavar="[REC2]",
+            help="A second recording, shown beside REC (e.g. its replay) on the same sim_time.",
+            show_default=False,
+        ),
+    ] = None,
+    save: Annotated[
+        Path | None,
+        typer.Option(
+            "--save",
+            metavar="OUT.rrd",
+            help="Write the Rerun file here (default: <REC stem>.rrd next to REC).",
+            show_default=False,
+        ),
+    ] = None,
+    spawn: Annotated[
+        bool | None,
+        typer.Option(
+            "--spawn/--no-spawn",
+            help="Open the Rerun viewer on the result (default: yes unless --save is given).",
+            show_default=False,
+        ),
+    ] = None,
+    web: Annotated[
+        bool,
+        typer.Option("--web", help="Serve the web viewer instead (no display needed; Ctrl-C)."),
+    ] = False,
+) -> None:
+    """Show a session in Rerun: the flight in 3D (world markers, vehicle pose, trajectory),
+    one lane per behavior with each activation, capability reference counts, and the
+    events, rejected activations, errors and service call tree as logs, on a `sim_time`
+    timeline (service calls also on `seq`).
+
+    With REC2, both sessions sit side by side (under /base and /new), aligned on sim_time:
+    a base run and its replay under a new catalog, say.
+
+    The Rerun file is written to --save, or next to REC (<REC stem>.rrd; two recordings:
+    <REC stem>_vs_<REC2 stem>.rrd). The viewer opens on it when it can run (the rerun
+    binary of rerun-sdk and a display); otherwise the command says so and where the file
+    is. Open it later with `rerun FILE.rrd`.
+
+    \b
+    Examples:
+      aeroexec view flight.mcap
+      aeroexec view base.mcap replay.mcap --save diff.rrd
+      aeroexec view flight.mcap --web
+
+    Exit codes: 0 written (and viewer started when asked); 2 a recording could not be read
+    (not MCAP, not an aeroexec recording, nothing readable) or the file not written.
+    """
+    output = save if save is not None else _default_output(recording, other)
+    inputs = [recording] if other is None else [recording, other]
+
+    report = write_view(inputs, output, progress=_progress)
+    _summary(report)
+    typer.echo(f"wrote {report.output}")
+    want_viewer = web or (spawn if spawn is not None else save is None)
+    if not want_viewer:
+        return
+    reason = cannot_spawn(web=web)
+    if reason is not None:
+        error_line(
+            f"aeroexec: viewer not started: {reason}. Open the file with `rerun {report.output}`"
+        )
+        return
+    if web:
+        typer.echo("serving the web viewer (Ctrl-C to stop)")
+    else:
+        typer.echo("opening the Rerun viewer")
+    open_viewer(report.output, web=web)
