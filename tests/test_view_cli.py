@@ -1,0 +1,210 @@
+"""`aeroexec view` on the command line: where the file goes, when the viewer opens,
+and one clear line with exit code 2 for anything that is not a readable aeroexec
+recording."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+from rerun.chunk import RrdReader
+from typer.testing import CliRunner
+
+from aeroexec.cli import app, view_cmd
+from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+ROS2_BAG = FIXTURES / "view" / "mcap_ros2_talker_zstd.mcap"
+
+
+@pytest.fixture(scope="module")
+def session_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("view_cli") / "flight.mcap"
+    simulate(SessionConfig(mission=APPENDIX_C, record=path))
+    return path
+
+
+@pytest.fixture()
+def flight(session_file: Path, tmp_path: Path) -> Path:
+    """A private copy, so default outputs land in this test's directory."""
+    copy = tmp_path / "flight.mcap"
+    shutil.copyfile(session_file, copy)
+    return copy
+
+
+@pytest.fixture()
+def headless(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+
+
+@pytest.fixture()
+def launches(monkeypatch: pytest.MonkeyPatch) -> list[tuple[Path, bool]]:
+    """Record viewer launches instead of starting one, as if it could run."""
+    calls: list[tuple[Path, bool]] = []
+
+    def fake_open(rrd: Path, *, web: bool = False) -> int:
+        calls.append((rrd, web))
+        return 0
+
+    monkeypatch.setattr(view_cmd, "open_viewer", fake_open)
+    monkeypatch.setattr(view_cmd, "cannot_spawn", lambda web=False: None)
+    return calls
+
+
+def _invoke(*args: str | Path) -> tuple[int, str, str]:
+    result = CliRunner().invoke(app, [str(a) for a in args])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def _entities(rrd: Path) -> set[str]:
+    return {chunk.entity_path for chunk in RrdReader(rrd).stream()}
+
+
+# -- where the file goes, and the viewer ------------------------------------------------
+def test_default_writes_next_to_the_input_and_says_why_no_viewer(
+    flight: Path, headless: None
+) -> None:
+    code, out, err = _invoke("view", flight)
+    target = flight.with_suffix(".rrd")
+    assert code == 0, err
+    assert target.is_file()
+    assert f"wrote {target}" in out
+    assert "viewer not started: no display" in err
+    assert f"rerun {target}" in err  # how to open it later
+    assert "/trajectory" in _entities(target)
+
+
+def test_save_writes_there_and_does_not_spawn(
+    flight: Path, tmp_path: Path, launches: list[tuple[Path, bool]]
+) -> None:
+    target = tmp_path / "out" / "x.rrd"
+    target.parent.mkdir()
+    code, _, err = _invoke("view", flight, "--save", target)
+    assert code == 0, err
+    assert target.is_file() and not flight.with_suffix(".rrd").exists()
+    assert launches == []
+    assert "viewer" not in err
+
+
+def test_viewer_opens_on_the_written_file_when_it_can_run(
+    flight: Path, launches: list[tuple[Path, bool]]
+) -> None:
+    code, out, err = _invoke("view", flight)
+    assert code == 0, err
+    assert launches == [(flight.with_suffix(".rrd"), False)]
+    assert "opening the Rerun viewer" in out
+
+
+def test_save_with_spawn_opens_the_saved_file(
+    flight: Path, tmp_path: Path, launches: list[tuple[Path, bool]]
+) -> None:
+    target = tmp_path / "s.rrd"
+    assert _invoke("view", flight, "--save", target, "--spawn")[0] == 0
+    assert launches == [(target, False)]
+
+
+def test_no_spawn_writes_the_file_only(flight: Path, launches: list[tuple[Path, bool]]) -> None:
+    code, _, err = _invoke("view", flight, "--no-spawn")
+    assert code == 0, err
+    assert flight.with_suffix(".rrd").is_file()
+    assert launches == []
+
+
+def test_web_serves_the_web_viewer(flight: Path, launches: list[tuple[Path, bool]]) -> None:
+    code, out, _ = _invoke("view", flight, "--web", "--no-spawn")
+    assert code == 0
+    assert launches == [(flight.with_suffix(".rrd"), True)]
+    assert "web viewer" in out
+
+
+def test_two_recordings_default_name_and_both_roots(
+    flight: Path, tmp_path: Path, headless: None
+) -> None:
+    other = tmp_path / "replay.mcap"
+    shutil.copyfile(flight, other)
+    code, out, err = _invoke("view", flight, other, "--no-spawn")
+    assert code == 0, err
+    target = tmp_path / "flight_vs_replay.rrd"
+    assert target.is_file()
+    entities = _entities(target)
+    assert {"/base/events", "/new/events", "/base/trajectory", "/new/trajectory"} <= entities
+    assert "under /base" in out and "under /new" in out
+
+
+def test_incomplete_recording_is_shown_with_a_warning(flight: Path, tmp_path: Path) -> None:
+    data = flight.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) * 2 // 3])
+    code, _, err = _invoke("view", cut, "--no-spawn")
+    assert code == 0, err
+    assert "warning: incomplete recording" in err
+    assert (tmp_path / "cut.rrd").is_file()
+
+
+def test_help_has_an_example() -> None:
+    code, out, _ = _invoke("view", "--help")
+    assert code == 0
+    assert "aeroexec view flight.mcap" in out
+    assert "--save" in out and "--web" in out
+
+
+# -- inputs that are not readable aeroexec recordings -----------------------------------
+def _assert_one_line_error(code: int, out: str, err: str, *needles: str) -> None:
+    assert code == 2
+    assert "Traceback" not in out + err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    for needle in needles:
+        assert needle in lines[0]
+
+
+def test_random_bytes(tmp_path: Path) -> None:
+    bad = tmp_path / "noise.mcap"
+    bad.write_bytes(os.urandom(4096))
+    code, out, err = _invoke("view", bad, "--no-spawn")
+    _assert_one_line_error(code, out, err, str(bad), "not an MCAP file")
+    assert not bad.with_suffix(".rrd").exists()
+
+
+def test_truncated_to_the_header(flight: Path, tmp_path: Path) -> None:
+    cut = tmp_path / "head.mcap"
+    cut.write_bytes(flight.read_bytes()[:100])
+    code, out, err = _invoke("view", cut, "--no-spawn")
+    _assert_one_line_error(code, out, err, str(cut), "no messages could be read")
+    assert not cut.with_suffix(".rrd").exists()
+
+
+def test_truncated_inside_the_magic(flight: Path, tmp_path: Path) -> None:
+    cut = tmp_path / "magic.mcap"
+    cut.write_bytes(flight.read_bytes()[:5])
+    code, out, err = _invoke("view", cut, "--no-spawn")
+    _assert_one_line_error(code, out, err, str(cut))
+
+
+def test_foreign_mcap_names_its_profile(tmp_path: Path) -> None:
+    assert ROS2_BAG.is_file()
+    code, out, err = _invoke("view", ROS2_BAG, "--save", tmp_path / "x.rrd")
+    _assert_one_line_error(code, out, err, "not an aeroexec recording (profile ros2)")
+    assert not (tmp_path / "x.rrd").exists()
+
+
+def test_foreign_second_recording_writes_nothing(flight: Path, tmp_path: Path) -> None:
+    code, out, err = _invoke("view", flight, ROS2_BAG, "--no-spawn")
+    _assert_one_line_error(code, out, err, "profile ros2")
+    assert list(tmp_path.glob("*.rrd")) == []
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    code, out, err = _invoke("view", tmp_path / "nope.mcap")
+    _assert_one_line_error(code, out, err, "no such file")
+
+
+def test_unwritable_output(flight: Path, tmp_path: Path) -> None:
+    code, out, err = _invoke("view", flight, "--save", tmp_path / "no" / "dir" / "x.rrd")
+    _assert_one_line_error(code, out, err, "cannot write")
+    code, out, err = _invoke("view", flight, "--save", tmp_path)
+    _assert_one_line_error(code, out, err, "is a directory")
