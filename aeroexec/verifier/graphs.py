@@ -294,7 +294,7 @@ class CatalogGraphs:
                 continue
             clash = self.catalog.conflicts_of(capability) & defaults
             if clash:
-                return capability, min(clash, key=self.capability_order.__getitem__)
+                return capability, min(clash)
         return None
 
     @cached_property
@@ -402,7 +402,8 @@ class CatalogGraphs:
     @cached_property
     def start_order_graph(self) -> nx.DiGraph:
         """What must start before what. Nodes: ("process", p), and ("capability", C)
-        meaning "C is up" (all its processes run). Edges carry `why` (an OrderEdge):
+        meaning "C is up" (all its processes run). Edges carry `why`: the OrderEdges
+        (catalog order) that impose them:
 
         * a capability's processes in their order, the last one before the capability
           is up;
@@ -420,8 +421,12 @@ class CatalogGraphs:
                 requires_scc[name] = scc
 
         def add(u: Node, v: Node, why: OrderEdge) -> None:
-            if u != v and not graph.has_edge(u, v):
-                graph.add_edge(u, v, why=why)
+            if u == v:
+                return
+            if graph.has_edge(u, v):
+                graph.edges[u, v]["why"].append(why)
+            else:
+                graph.add_edge(u, v, why=[why])
 
         def processes(name: str) -> tuple[str, ...]:
             return tuple(dict.fromkeys(capabilities[name].processes))

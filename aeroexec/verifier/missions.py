@@ -81,9 +81,10 @@ EXECUTE_RECURRENT = mission_rule(
     "mission-execute-recurrent",
     E,
     """A mission uses `execute_behavior` (activate and wait for the end event) on a
-    recurrent behavior. Recurrent behaviors never end by themselves, so the call would
-    never return; aeroexec's mission API refuses it at once. Fix: `activate_behavior`
-    it, and `inhibit_behavior` it when it is no longer needed.""",
+    recurrent behavior. Recurrent behaviors never end by themselves. In flight: the
+    2017 API blocks the mission forever; aeroexec's mission API refuses the call at
+    once. Fix: `activate_behavior` it, and `inhibit_behavior` it when it is no longer
+    needed.""",
 ).code
 INHIBIT_NOT_ACTIVATED = mission_rule(
     "AX706",

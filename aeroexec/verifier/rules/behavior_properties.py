@@ -81,9 +81,9 @@ def timeout_shorter_than_duration(graphs: CatalogGraphs) -> Iterator[Finding]:
     "duplicate-argument",
     W,
     """A behavior declares two arguments whose names differ at most in letter case.
-    Missions write argument names in any case (`coordinates=` for `COORDINATES`), so
-    the second declaration can never be used: every value is checked against the
-    first. Fix: keep one declaration.""",
+    Missions write argument names in any case (`coordinates=` for `COORDINATES`). In
+    flight: the second declaration is never used — every value is checked against the
+    first, whose range may not be the one meant. Fix: keep one declaration.""",
 )
 def duplicate_argument(graphs: CatalogGraphs) -> Iterator[Finding]:
     for definition in graphs.behavior_defs:

@@ -193,10 +193,11 @@ def undeclared_capability_conflict(graphs: CatalogGraphs) -> Iterator[Finding]:
     "AX305",
     "self-incompatible-capability",
     W,
-    """A capability lists itself in `incompatible_capabilities`. The executive ignores
-    the entry for a behavior's own set but rejects a second behavior that needs the
-    capability once it is referenced, which is almost never what was meant. Fix: remove
-    the entry.""",
+    """A capability lists itself in `incompatible_capabilities`. In flight: the
+    executive ignores the entry within one behavior's own capability set, so the
+    declaration does nothing except confuse whoever reads it (if the intent was "only
+    one behavior at a time may use it", that is what incompatible lists are for). Fix:
+    remove the entry.""",
 )
 def self_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
     for definition in graphs.capability_defs:
@@ -217,9 +218,9 @@ def self_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
     "dead-capability",
     INFO,
     """A capability that no behavior uses (directly or through `required_capabilities`)
-    and that is not active by default. Its processes never start. Harmless in flight,
-    but often the trace of a renamed capability. Fix: remove it, or name it where it is
-    needed.""",
+    and that is not active by default. In flight: its processes never start — harmless,
+    but often the trace of a renamed capability whose behaviors now miss it. Fix: remove
+    it, or name it where it is needed.""",
 )
 def dead_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
     used: set[str] = set(graphs.defaults)

@@ -150,10 +150,10 @@ def asymmetric_incompatibility_cycle(graphs: CatalogGraphs) -> Iterator[Finding]
     "dead-list",
     W,
     """A behavior list that no behavior names in `incompatible_lists`. Lists exist only
-    to be named there, so it has no effect at all — often because the name that was
-    meant to reach it is misspelled (the flown catalogs' `self_localization_behaviors`
-    is dead because behaviors name `self_localizaion_behaviors`). Fix: name it where it
-    was meant, or remove it.""",
+    to be named there. In flight: it has no effect at all, often because the name that
+    was meant to reach it is misspelled (the flown catalogs' `self_localization_behaviors`
+    is dead because behaviors name `self_localizaion_behaviors`), so the preemption it
+    describes never happens. Fix: name it where it was meant, or remove it.""",
 )
 def dead_list(graphs: CatalogGraphs) -> Iterator[Finding]:
     named = graphs.list_namers
@@ -187,8 +187,8 @@ def dead_list(graphs: CatalogGraphs) -> Iterator[Finding]:
     "AX404",
     "empty-list",
     W,
-    """A behavior list with no behaviors. Naming it in `incompatible_lists` preempts
-    nothing. Fix: fill it or remove it.""",
+    """A behavior list with no behaviors. In flight: naming it in `incompatible_lists`
+    preempts nothing. Fix: fill it or remove it.""",
 )
 def empty_list(graphs: CatalogGraphs) -> Iterator[Finding]:
     for definition in graphs.list_defs:

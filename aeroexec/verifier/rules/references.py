@@ -260,9 +260,10 @@ def _repeats(
     W,
     """The same name appears twice in one reference list: a list's `behaviors`, a
     behavior's `incompatible_lists` or `capabilities`, a capability's `processes`,
-    `incompatible_capabilities` or `required_capabilities`. The repetition has no
-    effect (capabilities are referenced once per behavior, processes started once), but
-    it usually hides a different name that was meant. Fix: remove or correct it.""",
+    `incompatible_capabilities` or `required_capabilities`. In flight: nothing
+    (capabilities are referenced once per behavior, processes started once), but the
+    repetition usually hides a different name that was meant, whose effect is missing.
+    Fix: remove the repetition or correct it to the name that was meant.""",
 )
 def repeated_reference(graphs: CatalogGraphs) -> Iterator[Finding]:
     for b in graphs.behavior_defs:

@@ -43,11 +43,16 @@ def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
     components.sort(key=lambda c: min(graphs.node_order(n) for n in c))
     for component in components:
         cycle = shortest_cycle(graph, component, graphs.node_order)
-        reasons: list[OrderEdge] = [graph.edges[u, v]["why"] for u, v in cycle_edges(cycle)]
+        reasons: list[OrderEdge] = [graph.edges[u, v]["why"][0] for u, v in cycle_edges(cycle)]
         shown = " -> ".join(node_label(n) for n in cycle)
         because = "; ".join(dict.fromkeys(r.reason for r in reasons if not r.implied))
-        imposers = list(dict.fromkeys(r.by for r in reasons if not r.implied))
-        members = sorted(component, key=graphs.node_order)
+        # Everyone imposing an edge inside the strongly connected set takes part, not
+        # only those on the cycle shown (which depends on where the search starts).
+        inside = graph.subgraph(component)
+        imposers = sorted(
+            {why.by for _, _, whys in inside.edges(data="why") for why in whys if not why.implied}
+        )
+        members = sorted(name for _, name in component)
         # The edge a behavior imposes is the most likely to be "the wrong one".
         anchor = next((r for r in reasons if r.by_kind == "behavior"), reasons[0])
         yield graphs.finding(
@@ -55,7 +60,7 @@ def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
             W,
             f"no start order satisfies every list: {shown} (because {because})",
             anchor.mark,
-            [*imposers, *(name for _, name in members)],
+            [*imposers, *members],
         )
 
 
