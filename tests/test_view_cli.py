@@ -208,3 +208,12 @@ def test_unwritable_output(flight: Path, tmp_path: Path) -> None:
     _assert_one_line_error(code, out, err, "cannot write")
     code, out, err = _invoke("view", flight, "--save", tmp_path)
     _assert_one_line_error(code, out, err, "is a directory")
+
+
+def test_rerun_disabled_in_the_environment_is_an_error_not_an_empty_file(
+    flight: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("RERUN", "off")
+    code, out, err = _invoke("view", flight, "--no-spawn")
+    _assert_one_line_error(code, out, err, "RERUN=off")
+    assert not flight.with_suffix(".rrd").exists()

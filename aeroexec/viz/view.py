@@ -130,6 +130,9 @@ def write_view(
     layouts = layouts_for(labels)
     recording_id = recording_id_for(inputs)
 
+    if os.environ.get("RERUN", "").strip().lower() in ("0", "no", "off", "false"):
+        # a disabled stream would write an empty file
+        raise RecordingError("Rerun logging is disabled (RERUN=off in the environment)")
     stream = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id, send_properties=False)
     stream.set_log_time_enabled(False)  # no wall-clock timeline: same input, same rows
     stream.set_log_tick_enabled(False)
