@@ -64,6 +64,20 @@ def test_min_severity_info_shows_infos_and_error_hides_warnings() -> None:
     assert errors_only.count(" error AX202 ") == 2
 
 
+def test_machine_formats_keep_infos_by_default() -> None:
+    _, out, _ = run(str(THESIS_CATALOG), "--format", "json")
+    document = json.loads(out)
+    assert document["summary"]["infos"] > 0
+    assert any(f["rule"] == "AX109" for f in document["findings"])
+    _, out, _ = run(str(THESIS_CATALOG), "--format", "json", "--min-severity", "warning")
+    assert json.loads(out)["summary"]["infos"] == 0
+
+
+def test_catalog_pattern_matching_nothing(tmp_path: Path) -> None:
+    pattern = str(tmp_path / "*.yaml")
+    assert_one_line_error(*run(pattern), "no catalog matches this pattern")
+
+
 def test_color_always() -> None:
     _, out, _ = run(str(THESIS_CATALOG), "--color", "always")
     assert "\x1b[" in out

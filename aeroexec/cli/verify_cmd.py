@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-import glob
 import os
 import sys
-from pathlib import Path
 
 import typer
 
 from aeroexec.catalog.model import Severity
 from aeroexec.cli.app import app, guarded
-from aeroexec.errors import AeroexecError, Mark
-from aeroexec.verifier import verify
+from aeroexec.errors import AeroexecError
+from aeroexec.verifier import expand_catalog_paths, verify
 from aeroexec.verifier.registry import get, suggest_code
 from aeroexec.verifier.report import FORMATS, render
 
@@ -37,21 +35,6 @@ Examples:
 Exit codes: 0 no errors; 1 errors (or warnings with --strict);
             2 an input could not be read (one line on stderr).
 """
-
-
-def _expand_catalogs(patterns: list[str]) -> list[str]:
-    """Paths as given; patterns the shell did not expand (quoted, or on Windows) are
-    globbed here. A pattern matching nothing is unreadable input."""
-    result: list[str] = []
-    for pattern in patterns:
-        if Path(pattern).exists() or not glob.has_magic(pattern):
-            result.append(pattern)
-            continue
-        matches = sorted(glob.glob(pattern, recursive=True))
-        if not matches:
-            raise AeroexecError("no catalog matches this pattern", Mark(pattern))
-        result.extend(matches)
-    return result
 
 
 def _use_color(choice: str | None) -> bool:
@@ -82,11 +65,12 @@ def verify_command(
     witness: bool = typer.Option(
         False, "--witness", help="Print each finding's witness activation sequence."
     ),
-    min_severity: str = typer.Option(
-        "warning",
+    min_severity: str | None = typer.Option(
+        None,
         "--min-severity",
         metavar="LEVEL",
-        help="Show findings from this level up: info, warning (default) or error.",
+        help="Show findings from this level up: info, warning or error "
+        "(default: warning for text and github, info for json and sarif).",
     ),
     explain: str | None = typer.Option(
         None, "--explain", metavar="CODE", help="Print a rule's documentation and exit."
@@ -103,6 +87,8 @@ def verify_command(
         return
     if output_format not in FORMATS:
         raise AeroexecError(f"unknown format {output_format!r} (formats: {', '.join(FORMATS)})")
+    if min_severity is None:
+        min_severity = "info" if output_format in ("json", "sarif") else "warning"
     try:
         threshold = Severity(min_severity)
     except ValueError:
@@ -111,7 +97,7 @@ def verify_command(
         raise AeroexecError(f"--color takes always or never, got {color!r}")
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
-    report = verify(_expand_catalogs(catalogs), mission)
+    report = verify(expand_catalog_paths(catalogs), mission)
     shown = report.at_least(threshold)
     use_color = _use_color(color)
     text = render(shown, output_format, witness=witness, color=use_color)

@@ -11,7 +11,13 @@ code, a severity and a one-paragraph doc. `docs/rules.md` is generated from it
 (`python -m aeroexec.verifier.docs`).
 """
 
-from aeroexec.verifier.engine import check_catalog, verify, verify_catalog, verify_catalog_file
+from aeroexec.verifier.engine import (
+    check_catalog,
+    expand_catalog_paths,
+    verify,
+    verify_catalog,
+    verify_catalog_file,
+)
 from aeroexec.verifier.findings import Finding, Outcome, Report, Step, Witness
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.missions import MissionScript, check_mission, parse_mission, read_mission
@@ -29,6 +35,7 @@ __all__ = [
     "all_rules",
     "check_catalog",
     "check_mission",
+    "expand_catalog_paths",
     "get",
     "parse_mission",
     "read_mission",

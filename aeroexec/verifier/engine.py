@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import glob
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from aeroexec.catalog.loader import read_catalog
 from aeroexec.catalog.model import Catalog
+from aeroexec.errors import CatalogError, Mark
 from aeroexec.verifier.findings import Finding, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.missions import (
@@ -18,6 +20,23 @@ from aeroexec.verifier.missions import (
 from aeroexec.verifier.registry import catalog_checks
 
 CatalogInput = str | Path | Catalog
+
+
+def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
+    """Catalog paths as given; glob patterns that name no existing file (quoted on the
+    command line, or on Windows) are expanded here. `CatalogError` for a pattern that
+    matches nothing; a plain missing path is left for the loader to report."""
+    result: list[str] = []
+    for pattern in patterns:
+        text = str(pattern)
+        if Path(text).exists() or not glob.has_magic(text):
+            result.append(text)
+            continue
+        matches = sorted(glob.glob(text, recursive=True))
+        if not matches:
+            raise CatalogError("no catalog matches this pattern", Mark(text))
+        result.extend(matches)
+    return result
 
 
 def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[Finding]:
