@@ -1,0 +1,162 @@
+"""Closed-loop replay: run the recorded mission again, in the simulator.
+
+The recording carries everything a simulated session was made of: the mission script
+(`mission.py`), the world (`world.yaml`), the seed and the drone name (metadata). Replay
+hands them to `aeroexec.mission.session.simulate` with the chosen catalog — the very
+function `aeroexec run` uses — so with the recorded catalog and unchanged code the replay
+is the same session again, message for message and, when recorded with the same
+settings, byte for byte.
+
+A recording without a script attachment is replayed from its `mission/command` stream
+instead (`CommandPlayer`, commands at their recorded times, each waiting for the end of
+a previous `execute_behavior` as the script did).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+from aeroexec import __version__
+from aeroexec.catalog.model import Catalog
+from aeroexec.executive.bus import BusObserver
+from aeroexec.executive.clock import SimClock
+from aeroexec.executive.executive import Executive
+from aeroexec.mission.script import compile_mission
+from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.replay.collect import OutcomeBuilder, OutcomeObserver, RecordedRun
+from aeroexec.replay.outcome import RunOutcome
+from aeroexec.replay.player import CommandPlayer
+from aeroexec.vehicles.sim import SimVehicle
+from aeroexec.vehicles.world import DEFAULT_WORLD, parse_world
+
+
+@dataclass(frozen=True, slots=True)
+class ChosenCatalog:
+    """The catalog a replay runs with: the loaded model, its exact text (recorded as the
+    replay's attachment) and the name the session metadata shows."""
+
+    catalog: Catalog
+    text: str
+    name: str
+
+
+class _Discard(io.TextIOBase):
+    """Where a replayed mission's prints go (the report says what matters)."""
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+
+def _seed(metadata: dict[str, str], notes: list[str]) -> int:
+    try:
+        return int(metadata.get("seed", "0"))
+    except ValueError:
+        notes.append(f"seed {metadata.get('seed')!r} is not an integer: replayed with seed 0")
+        return 0
+
+
+def _world(run: RecordedRun, notes: list[str]) -> tuple[str, str]:
+    name = run.metadata.get("world") or "default"
+    text = run.text("world.yaml")
+    if text is None:
+        notes.append("no world.yaml attachment: replayed in the default world")
+        return DEFAULT_WORLD.read_text(encoding="utf-8"), "default"
+    return text, name
+
+
+def replay_closed(
+    run: RecordedRun,
+    catalog: ChosenCatalog,
+    output: str | Path | None,
+    horizon_ns: int | None,
+) -> tuple[RunOutcome, tuple[str, ...]]:
+    """Replay `run` in the simulator; the replay's outcome and notes about how."""
+    notes: list[str] = []
+    metadata = run.metadata
+    seed = _seed(metadata, notes)
+    world = _world(run, notes)
+    drone = metadata.get("drone") or "drone1"
+    builder = OutcomeBuilder(horizon_ns)
+    observer = OutcomeObserver(builder)
+    script_text = run.text("mission.py")
+    if script_text is None:
+        notes.append("no mission.py attachment: replayed the recorded mission/command stream")
+        _replay_commands(run, catalog, output, world, seed, drone, observer)
+    else:
+        script = compile_mission(script_text, metadata.get("mission") or "mission.py")
+        world_name = world[1]
+        config = SessionConfig(
+            mission=script.path,
+            catalog=catalog.name,
+            seed=seed,
+            world=None if world_name == "default" else world_name,
+            record=output,
+            drone=drone,
+        )
+        with contextlib.redirect_stdout(_Discard()):
+            result = simulate(
+                config,
+                [observer],
+                catalog=catalog.catalog,
+                script=script,
+                catalog_text=catalog.text,
+                world=world,
+            )
+        if not result.outcome.returned:
+            notes.append(f"the replayed mission raised: {result.outcome.error}")
+    outcome = builder.outcome(f"{run.outcome.source} (replay)", metadata=dict(metadata))
+    return outcome, tuple(notes)
+
+
+def _replay_commands(
+    run: RecordedRun,
+    catalog: ChosenCatalog,
+    output: str | Path | None,
+    world: tuple[str, str],
+    seed: int,
+    drone: str,
+    observer: OutcomeObserver,
+) -> None:
+    vehicle = SimVehicle(parse_world(*world), seed=seed)
+    # The simulation starts when the recording does (a live log's clock need not be 0).
+    offset = run.outcome.start_ns or 0
+    observer.offset_ns = offset
+    observers: list[BusObserver] = [observer]
+    recorder = None
+    if output is not None:
+        from aeroexec.recording import Recorder
+
+        recorder = Recorder(
+            output,
+            drone=drone,
+            metadata={
+                "aeroexec_version": __version__,
+                "seed": str(seed),
+                "clock": "sim",
+                "vehicle": vehicle.kind,
+                "drone": drone,
+                "catalog": catalog.name,
+                "mission": "(mission/command stream)",
+                "world": world[1],
+                "replay_of": Path(run.outcome.source).name,
+                "time_offset_ns": str(offset),
+            },
+            attachments={"catalog.yaml": catalog.text, "world.yaml": world[0]},
+        )
+        observers.append(recorder)
+    try:
+        executive = Executive(
+            catalog.catalog,
+            vehicle=vehicle,
+            clock=SimClock(),
+            observers=observers,
+            drone=drone,
+        )
+        player = CommandPlayer(executive, offset_ns=offset, wait_for_execute=True)
+        player.play(run.outcome.commands, until_ns=run.outcome.end_ns)
+    finally:
+        if recorder is not None:
+            recorder.close()

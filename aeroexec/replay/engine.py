@@ -1,0 +1,215 @@
+"""Replay recordings and diff each replay against its original.
+
+    result = replay_recording("flight.mcap", ReplayOptions(catalog="new.yaml"))
+    result.diff.differences      # what changed, per mission command
+    results = replay_many(paths, options, jobs=4)   # in input order, deterministic
+
+Mode: closed loop (re-simulate the mission) by default for simulated recordings
+(metadata clock "sim"), open loop (recorded inputs into the executive) for the rest.
+A recording cut short (a crash) is compared up to where it could be read, and the
+report says so.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field, replace
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
+from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
+from aeroexec.replay.collect import RecordedRun, read_run
+from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
+from aeroexec.replay.openloop import replay_open
+from aeroexec.replay.outcome import NS_PER_S
+
+
+class Mode(str, Enum):
+    closed = "closed"
+    open = "open"
+
+
+@dataclass(frozen=True, slots=True)
+class ReplayOptions:
+    #: A catalog file to replay with (default: the recording's own catalog attachment).
+    catalog: str | None = None
+    #: None: closed for simulated recordings, open for the others.
+    mode: Mode | None = None
+    #: Write the replay to this MCAP file.
+    output: str | None = None
+    tolerance: Tolerance = field(default_factory=Tolerance)
+
+
+@dataclass(frozen=True, slots=True)
+class ReplayResult:
+    """One recording's replay: its diff against the original, or why it could not run."""
+
+    recording: str
+    mode: str | None = None
+    catalog: str = ""
+    #: True when the replay ran with the recording's own catalog attachment.
+    catalog_recorded: bool = False
+    diff: DiffResult | None = None
+    error: str | None = None
+    output: str | None = None
+    notes: tuple[str, ...] = ()
+
+    @property
+    def equal(self) -> bool:
+        return self.error is None and self.diff is not None and self.diff.equal
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "recording": self.recording,
+            "mode": self.mode,
+            "catalog": self.catalog,
+            "catalog_recorded": self.catalog_recorded,
+            "equal": self.equal,
+            "error": self.error,
+            "output": self.output,
+            "compared_commands": self.diff.compared if self.diff else 0,
+            "differences": [d.as_dict() for d in self.diff.differences] if self.diff else [],
+            "notes": list(self.notes),
+        }
+
+
+def choose_mode(run: RecordedRun, requested: Mode | None) -> Mode:
+    if requested is not None:
+        return requested
+    return Mode.closed if run.metadata.get("clock") == "sim" else Mode.open
+
+
+def choose_catalog(run: RecordedRun, path: str | None) -> ChosenCatalog:
+    if path is not None:
+        catalog = load_catalog(path)
+        return ChosenCatalog(catalog, catalog.text, Path(path).name)
+    text = run.text("catalog.yaml")
+    if text is None:
+        raise CatalogError(
+            "the recording has no catalog.yaml attachment: give one with --catalog",
+            Mark(run.outcome.source),
+        )
+    name = run.metadata.get("catalog") or "catalog.yaml"
+    catalog = strict(parse_catalog(text, f"{run.outcome.source}#catalog.yaml"))
+    return ChosenCatalog(catalog, text, name)
+
+
+def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
+    """Replay one recording and diff it against the original. Input problems raise
+    `AeroexecError` (unreadable, not MCAP, no mission commands, bad catalog)."""
+    name = str(path)
+    run = read_run(path)
+    notes: list[str] = []
+    horizon = None
+    if not run.outcome.complete:
+        # Compare both runs up to (not including) the last instant the file holds: the
+        # messages of that instant may be only partly there.
+        horizon = run.outcome.end_ns
+        run = read_run(path, horizon)
+        shown = (horizon or 0) / NS_PER_S
+        notes.append(
+            f"incomplete recording ({run.outcome.problem}): compared the first {shown:.1f} s "
+            f"({len(run.outcome.commands)} commands) only"
+        )
+    mode = choose_mode(run, options.mode)
+    catalog = choose_catalog(run, options.catalog)
+    if mode is Mode.closed:
+        replayed, how = replay_closed(run, catalog, options.output, horizon)
+    else:
+        replayed, how = replay_open(path, run, catalog, options.output, horizon)
+    notes.extend(how)
+    diff = diff_outcomes(
+        run.outcome,
+        replayed,
+        options.tolerance,
+        base_name="the recording",
+        new_name="the replay",
+        compare_state=mode is Mode.closed,
+    )
+    notes.extend(diff.notes)
+    return ReplayResult(
+        recording=name,
+        mode=mode.value,
+        catalog=catalog.name if options.catalog is None else str(options.catalog),
+        catalog_recorded=options.catalog is None,
+        diff=diff,
+        output=str(options.output) if options.output is not None else None,
+        notes=tuple(notes),
+    )
+
+
+def replay_file(path: str, options: ReplayOptions) -> ReplayResult:
+    """`replay_recording`, with input problems as a result (for batches and workers)."""
+    try:
+        return replay_recording(path, options)
+    except AeroexecError as exc:
+        text = exc.message if exc.mark is not None and exc.mark.file == path else str(exc)
+        return ReplayResult(recording=path, error=text, mode=_mode_name(options))
+
+
+def _mode_name(options: ReplayOptions) -> str | None:
+    return options.mode.value if options.mode is not None else None
+
+
+def output_for(recording: str, out_dir: str) -> str:
+    return str(Path(out_dir) / Path(recording).name)
+
+
+def replay_many(
+    paths: Sequence[str],
+    options: ReplayOptions,
+    *,
+    jobs: int = 1,
+    out_dir: str | None = None,
+    on_done: Callable[[ReplayResult], None] | None = None,
+) -> list[ReplayResult]:
+    """Replay every recording, `jobs` at a time in separate processes; the results come
+    back in the order of `paths` whatever finishes first. `out_dir`: write each replay
+    to `out_dir/<recording name>`. `on_done` is told each result as it finishes."""
+    per_path = [
+        replace(options, output=output_for(p, out_dir)) if out_dir is not None else options
+        for p in paths
+    ]
+    if jobs <= 1 or len(paths) <= 1:
+        results = []
+        for path, opts in zip(paths, per_path, strict=True):
+            result = replay_file(path, opts)
+            if on_done is not None:
+                on_done(result)
+            results.append(result)
+        return results
+    with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
+        futures = [pool.submit(replay_file, p, o) for p, o in zip(paths, per_path, strict=True)]
+        if on_done is not None:
+            for future in as_completed(futures):
+                on_done(future.result())
+        return [future.result() for future in futures]
+
+
+def diff_recordings(
+    base: str | os.PathLike[str],
+    new: str | os.PathLike[str],
+    tolerance: Tolerance | None = None,
+) -> DiffResult:
+    """What changed from the recording `base` to the recording `new`. A recording cut
+    short limits the comparison to the time both files cover."""
+    runs = [read_run(base), read_run(new)]
+    cuts = [r.outcome.end_ns for r in runs if not r.outcome.complete and r.outcome.end_ns]
+    notes: tuple[str, ...] = ()
+    if cuts:
+        horizon = min(cuts)
+        runs = [read_run(base, horizon), read_run(new, horizon)]
+        notes = (f"a recording is incomplete: compared the first {horizon / NS_PER_S:.1f} s only",)
+    return diff_outcomes(
+        runs[0].outcome,
+        runs[1].outcome,
+        tolerance,
+        base_name=str(base),
+        new_name=str(new),
+        notes=notes,
+    )

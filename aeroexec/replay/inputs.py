@@ -1,0 +1,37 @@
+"""Which recordings a command line names: files, directories (every `*.mcap` inside,
+sorted) and glob patterns (sorted matches), in the order given."""
+
+from __future__ import annotations
+
+import glob
+from dataclasses import dataclass
+from pathlib import Path
+
+_GLOB_CHARS = frozenset("*?[")
+
+
+@dataclass(frozen=True, slots=True)
+class Input:
+    """A recording to replay, or (with `error`) an argument that names none."""
+
+    path: str
+    error: str | None = None
+
+
+def expand_inputs(arguments: list[str]) -> list[Input]:
+    out: list[Input] = []
+    for argument in arguments:
+        path = Path(argument)
+        if path.is_dir():
+            found = sorted(str(p) for p in path.glob("*.mcap") if p.is_file())
+            if not found:
+                out.append(Input(argument, "no *.mcap recordings in this directory"))
+            out.extend(Input(p) for p in found)
+        elif not path.exists() and _GLOB_CHARS & set(argument):
+            matches = sorted(m for m in glob.glob(argument, recursive=True) if Path(m).is_file())
+            if not matches:
+                out.append(Input(argument, "no recordings match this pattern"))
+            out.extend(Input(m) for m in matches)
+        else:
+            out.append(Input(argument))
+    return out

@@ -1,0 +1,86 @@
+"""Open-loop replay: the recorded external inputs into an executive with a new catalog.
+
+For recordings of real flights (and imported bags) the world cannot be simulated again,
+so the executive gets what came from outside it, at the recorded times: the mission's
+commands (`CommandPlayer`), the vehicle state (`ReplayVehicle`, streamed from
+`vehicle/state`) and how each behavior ended (`standins`: each stand-in ends with the
+recorded code at the recorded time after its start, or is left to the catalog's timeout
+and the replayed commands). What can change is what the executive decides: accepted or
+rejected, preemptions, capabilities and processes, timeouts.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from aeroexec import __version__
+from aeroexec.executive.bus import BusObserver
+from aeroexec.executive.clock import SimClock
+from aeroexec.executive.executive import Executive
+from aeroexec.replay.closedloop import ChosenCatalog
+from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
+from aeroexec.replay.outcome import RunOutcome
+from aeroexec.replay.player import CommandPlayer
+from aeroexec.replay.source import RecordingSource
+from aeroexec.replay.standins import Script, stand_in_library
+from aeroexec.replay.vehicle import ReplayVehicle
+
+
+def replay_open(
+    path: str | Path,
+    run: RecordedRun,
+    catalog: ChosenCatalog,
+    output: str | Path | None,
+    horizon_ns: int | None,
+) -> tuple[RunOutcome, tuple[str, ...]]:
+    """Replay `run` (read from `path`) open loop; the replay's outcome and notes."""
+    notes: list[str] = []
+    recorded = run.outcome
+    offset = recorded.start_ns or 0
+    drone = run.metadata.get("drone") or "drone1"
+    states = RecordingSource(path).scan(lambda name: name == STATE_TOPIC)
+    clock = SimClock()
+    vehicle = ReplayVehicle(states, clock, offset)
+    script = Script()
+    builder = OutcomeBuilder(horizon_ns)
+    observers: list[BusObserver] = [OutcomeObserver(builder, offset_ns=offset)]
+    recorder = None
+    if output is not None:
+        from aeroexec.recording import Recorder
+
+        recorder = Recorder(
+            output,
+            drone=drone,
+            metadata={
+                "aeroexec_version": __version__,
+                "clock": "replay",
+                "vehicle": vehicle.kind,
+                "drone": drone,
+                "catalog": catalog.name,
+                "mission": "(mission/command stream)",
+                "replay_of": Path(recorded.source).name,
+                "replay_mode": "open",
+                "time_offset_ns": str(offset),
+            },
+            attachments={"catalog.yaml": catalog.text},
+        )
+        observers.append(recorder)
+    try:
+        executive = Executive(
+            catalog.catalog,
+            vehicle=vehicle,
+            clock=clock,
+            library=stand_in_library(catalog.catalog, script),
+            observers=observers,
+            drone=drone,
+        )
+        player = CommandPlayer(executive, offset_ns=offset, arm=script.arm)
+        player.play(recorded.commands, until_ns=recorded.end_ns)
+    finally:
+        states.close()
+        if recorder is not None:
+            recorder.close()
+    if offset:
+        notes.append(f"recorded times start at {offset / 1e9:.3f} s: the replay starts there")
+    outcome = builder.outcome(f"{recorded.source} (open-loop replay)", metadata=dict(run.metadata))
+    return outcome, tuple(notes)

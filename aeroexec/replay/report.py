@@ -1,0 +1,153 @@
+"""Render replay and diff results for people (text) and for CI (JSON, JUnit XML).
+
+Text is for a reviewer's ten seconds: one header line per recording, then one line per
+difference saying which command, what changed and why. JSON is one object with `equal`
+and `differences` (flattened, each naming its recording). JUnit XML is one testsuite
+with one testcase per recording (replay) or one for the pair (diff); differences are a
+`<failure>`, an unreadable recording an `<error>`. Nothing depends on timing, so the
+same results always render the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+
+from aeroexec.replay.diff import DiffResult
+from aeroexec.replay.engine import ReplayResult
+
+MODE_NAMES = {"closed": "closed-loop replay", "open": "open-loop replay"}
+
+
+def _count(n: int, word: str) -> str:
+    return f"{n} {word}{'' if n == 1 else 's'}"
+
+
+def _verdict(diff: DiffResult) -> str:
+    compared = _count(diff.compared, "command")
+    if diff.equal:
+        return f"no differences ({compared} compared)"
+    return f"{_count(len(diff.differences), 'difference')} ({compared} compared)"
+
+
+def _diff_lines(diff: DiffResult, notes: Sequence[str]) -> list[str]:
+    lines = [f"  {d.message}" for d in diff.differences]
+    lines.extend(f"  note: {note}" for note in notes)
+    return lines
+
+
+# -- replay ------------------------------------------------------------------------------
+def replay_header(result: ReplayResult) -> str:
+    mode = MODE_NAMES.get(result.mode or "", "replay")
+    if result.diff is None:
+        return f"{result.recording}: {mode}: error: {result.error}"
+    catalog = f"its recorded {result.catalog}" if result.catalog_recorded else result.catalog
+    return f"{result.recording}: {mode} with {catalog}: {_verdict(result.diff)}"
+
+
+def replay_summary(results: Sequence[ReplayResult]) -> str:
+    errors = sum(r.error is not None for r in results)
+    differing = sum(r.error is None and not r.equal for r in results)
+    same = len(results) - errors - differing
+    return (
+        f"{_count(len(results), 'recording')}: {differing} with differences, "
+        f"{same} without, {errors} unreadable"
+    )
+
+
+def replay_text(results: Sequence[ReplayResult]) -> str:
+    """Readable results; unreadable recordings are left to stderr (one line each) and
+    only counted in the summary line (printed for more than one recording)."""
+    lines: list[str] = []
+    for result in results:
+        if result.diff is None:
+            continue
+        lines.append(replay_header(result))
+        lines.extend(_diff_lines(result.diff, result.notes))
+        if result.output:
+            lines.append(f"  replay written to {result.output}")
+    if len(results) > 1:
+        lines.append(replay_summary(results))
+    return "\n".join(lines)
+
+
+def replay_json(results: Sequence[ReplayResult]) -> str:
+    differences = []
+    for result in results:
+        if result.diff is not None:
+            for d in result.diff.differences:
+                differences.append({"recording": result.recording, **d.as_dict()})
+    document = {
+        "equal": all(r.equal for r in results),
+        "recordings": [r.as_dict() for r in results],
+        "differences": differences,
+        "errors": [{"recording": r.recording, "error": r.error} for r in results if r.error],
+        "summary": replay_summary(results),
+    }
+    return json.dumps(document, indent=2)
+
+
+def replay_junit(results: Sequence[ReplayResult], suite: str = "aeroexec replay") -> str:
+    root = _suite(suite, len(results))
+    failures = errors = 0
+    for result in results:
+        case = ET.SubElement(
+            root, "testcase", {"classname": "aeroexec.replay", "name": result.recording}
+        )
+        if result.diff is None:
+            errors += 1
+            error = ET.SubElement(case, "error", {"message": result.error or "", "type": "input"})
+            error.text = replay_header(result)
+            continue
+        if not result.diff.equal:
+            failures += 1
+            _failure(case, result.diff, result.notes, replay_header(result))
+        elif result.notes:
+            ET.SubElement(case, "system-out").text = "\n".join(result.notes)
+    return _finish(root, failures, errors)
+
+
+# -- diff --------------------------------------------------------------------------------
+def diff_text(diff: DiffResult) -> str:
+    header = f"{diff.base} -> {diff.new}: {_verdict(diff)}"
+    return "\n".join([header, *_diff_lines(diff, diff.notes)])
+
+
+def diff_json(diff: DiffResult) -> str:
+    return json.dumps(diff.as_dict(), indent=2)
+
+
+def diff_junit(diff: DiffResult) -> str:
+    root = _suite("aeroexec diff", 1)
+    case = ET.SubElement(
+        root, "testcase", {"classname": "aeroexec.diff", "name": f"{diff.base} -> {diff.new}"}
+    )
+    failures = 0
+    if not diff.equal:
+        failures = 1
+        _failure(case, diff, diff.notes, f"{diff.base} -> {diff.new}: {_verdict(diff)}")
+    return _finish(root, failures, 0)
+
+
+# -- JUnit plumbing ------------------------------------------------------------------------
+def _suite(name: str, tests: int) -> ET.Element:
+    return ET.Element("testsuite", {"name": name, "tests": str(tests)})
+
+
+def _failure(case: ET.Element, diff: DiffResult, notes: Sequence[str], header: str) -> None:
+    failure = ET.SubElement(
+        case,
+        "failure",
+        {"message": _count(len(diff.differences), "difference"), "type": "replay-difference"},
+    )
+    failure.text = "\n".join([header, *_diff_lines(diff, notes)])
+
+
+def _finish(root: ET.Element, failures: int, errors: int) -> str:
+    root.set("failures", str(failures))
+    root.set("errors", str(errors))
+    root.set("skipped", "0")
+    ET.indent(root)
+    body = ET.tostring(root, encoding="unicode")
+    return f'<?xml version="1.0" encoding="UTF-8"?>\n{body}'
