@@ -245,7 +245,12 @@ class Recorder:
         self._pending_since = 0
         self._flushed = 0
         self._closed = False
-        self._guard(self._start, dict(metadata or {}), dict(attachments or {}))
+        try:
+            self._guard(self._start, dict(metadata or {}), dict(attachments or {}))
+        except BaseException:
+            self._closed = True
+            self._stream.close()
+            raise
         atexit.register(self.close)
 
     # -- BusObserver ---------------------------------------------------------------------
