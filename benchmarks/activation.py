@@ -1,0 +1,288 @@
+"""Benchmark: activations per second through the executive's whole path (design.md s.10).
+
+Every activation goes through the full coordinator path -- argument format check,
+situation, consistency with the active set, capability feasibility, preemption of the
+active behavior (INTERRUPTED event, capabilities cancelled, processes stopped), default
+values, start (capabilities activated, processes started) -- with recording off (no bus
+observers), on `NullVehicle` with no behavior library (every behavior is a
+`GenericBehavior`), so the figure is the executive's own cost.
+
+The loop cycles six motion behaviors that each preempt the previous one:
+GO_TO_POINT(coordinates) -> ROTATE(angle) -> TAKE_OFF -> FOLLOW_OBJECT_IMAGE (takes the
+servoing capability that conflicts with the released flight control: the zero-reference
+fix) -> START_MOVING(speed, direction) -> LAND -> GO_TO_POINT ...
+
+(a) on the shipped default catalog (13 behaviors, 6 capabilities);
+(b) on a generated 10,000-behavior catalog with the same structure scaled: 769 copies of
+    the default catalog's behaviors, lists and capabilities (suffixed names, own
+    processes), chained so that each group's behaviors also preempt the previous group's
+    (the cycle walks the groups: LAND_g-1 -> GO_TO_POINT_g does exactly the work LAND ->
+    GO_TO_POINT does in (a)), plus filler behaviors to 10,000. One default capability,
+    as in (a): defaults are platform-wide, not per behavior.
+
+Targets: (a) >= 50,000 activations/s; cost ratio (b)/(a) <= 1.25x. Both are measured in
+one run, in interleaved rounds; each figure is the best round, in CPU time of the
+process (the wall-clock figure is printed beside it: on a shared machine the wall clock
+also counts other processes' time slices). Exits 1 when a target is missed.
+
+    .venv/bin/python benchmarks/activation.py [--activations 12000] [--repeat 10] [--profile]
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import gc
+import io
+import pstats
+import statistics
+import sys
+import time
+from collections.abc import Mapping
+from typing import Any
+
+from aeroexec.catalog import DEFAULT_CATALOG, Catalog, load_catalog, parse_catalog
+from aeroexec.executive import Executive
+from aeroexec.vehicles.null import NullVehicle
+
+RATE_TARGET = 50_000.0
+RATIO_TARGET = 1.25
+LARGE_BEHAVIORS = 10_000
+
+#: The cycle: (behavior, arguments); each preempts the one before it.
+CYCLE: tuple[tuple[str, Mapping[str, Any]], ...] = (
+    ("GO_TO_POINT", {"coordinates": [1.0, 2.0, 3.0]}),
+    ("ROTATE", {"angle": 90}),
+    ("TAKE_OFF", {}),
+    ("FOLLOW_OBJECT_IMAGE", {}),
+    ("START_MOVING", {"speed": 2, "direction": "FORWARD"}),
+    ("LAND", {}),
+)
+
+
+# -- the 10,000-behavior catalog --------------------------------------------------------
+def large_catalog_text(behaviors: int = LARGE_BEHAVIORS) -> str:
+    """The default catalog's structure, scaled (see the module docstring)."""
+    base = load_catalog(DEFAULT_CATALOG)
+    per_group = len(base.behaviors)
+    groups = behaviors // per_group
+    fillers = behaviors - groups * per_group
+    out = ["behavior_descriptors:"]
+    for g in range(groups):
+        previous = (g - 1) % groups
+        for b in base.behaviors.values():
+            out.append(f"  - behavior: {b.name}_{g}")
+            if b.timeout is not None:
+                out.append(f"    timeout: {b.timeout:g}")
+            out.append(f"    recurrent: {'yes' if b.recurrent else 'no'}")
+            if b.incompatible_lists:
+                lists = [f"{x}_{g}" for x in b.incompatible_lists]
+                lists += [f"{x}_{previous}" for x in b.incompatible_lists]
+                out.append(f"    incompatible_lists: [{', '.join(lists)}]")
+            if b.capabilities:
+                caps = [
+                    c if base.capabilities[c].active_by_default else f"{c}_{g}"
+                    for c in b.capabilities
+                ]
+                out.append(f"    capabilities: [{', '.join(caps)}]")
+            if b.arguments:
+                out.append("    arguments:")
+                for a in b.arguments:
+                    out.append(f"      - argument: {a.name}")
+                    if a.kind.value == "range":
+                        out.append(f"        allowed_values: [{a.minimum:g}, {a.maximum:g}]")
+                        if a.dimensions != 1:
+                            out.append(f"        dimensions: {a.dimensions}")
+                    elif a.kind.value == "symbols":
+                        out.append(f"        allowed_values: [{', '.join(a.symbols)}]")
+                    else:
+                        out.append("        allowed_values: TEXT")
+    for i in range(fillers):
+        out += [f"  - behavior: FILLER_{i}", "    timeout: 15", "    recurrent: no"]
+    out.append("behavior_lists:")
+    for g in range(groups):
+        for lst in base.lists.values():
+            members = ", ".join(f"{m}_{g}" for m in lst.behaviors)
+            out += [f"  - list: {lst.name}_{g}", f"    behaviors: [{members}]"]
+    out.append("capability_descriptors:")
+    for c in base.capabilities.values():
+        if c.active_by_default:
+            out += [
+                f"  - capability: {c.name}",
+                "    active_by_default: yes",
+                f"    processes: [{', '.join(c.processes)}]",
+            ]
+    for g in range(groups):
+        for c in base.capabilities.values():
+            if c.active_by_default:
+                continue
+            out += [
+                f"  - capability: {c.name}_{g}",
+                "    active_by_default: no",
+                f"    processes: [{', '.join(f'{p}_{g}' for p in c.processes)}]",
+            ]
+            if c.incompatible_capabilities:
+                conflicts = ", ".join(f"{x}_{g}" for x in c.incompatible_capabilities)
+                out.append(f"    incompatible_capabilities: [{conflicts}]")
+    return "\n".join(out) + "\n"
+
+
+# -- the loop ---------------------------------------------------------------------------
+def plan(catalog: Catalog, activations: int) -> list[tuple[str, dict[str, Any]]]:
+    """The activation sequence: the cycle, walking the groups of a scaled catalog."""
+    suffixed = "GO_TO_POINT" not in catalog.behaviors
+    groups = sum(1 for n in catalog.behaviors if n.startswith("GO_TO_POINT_")) if suffixed else 1
+    sequence: list[tuple[str, dict[str, Any]]] = []
+    cycle = 0
+    while len(sequence) < activations:
+        group = cycle % groups
+        for name, args in CYCLE:
+            sequence.append((f"{name}_{group}" if suffixed else name, dict(args)))
+        cycle += 1
+    return sequence[:activations]
+
+
+def build(catalog: Catalog) -> Executive:
+    return Executive(catalog, vehicle=NullVehicle(), library={})
+
+
+def run(ex: Executive, sequence: list[tuple[str, dict[str, Any]]]) -> tuple[float, float]:
+    """(CPU seconds, wall seconds) for the whole sequence; every activation must succeed."""
+    activate = ex.activate_behavior
+    gc.collect()
+    cpu, wall = time.process_time(), time.perf_counter()
+    for name, args in sequence:
+        if not activate(name, args).ok:
+            raise SystemExit(f"activation of {name} refused: {activate(name, args).error}")
+    return time.process_time() - cpu, time.perf_counter() - wall
+
+
+def check_path(ex: Executive, sequence: list[tuple[str, dict[str, Any]]]) -> None:
+    """Before timing: each activation preempts exactly the previous behavior, and the
+    active set stays one behavior (so both loops do the same work)."""
+    previous: str | None = None
+    for name, args in sequence[: 2 * len(CYCLE) + 1]:
+        result = ex.activate_behavior(name, args)
+        assert result.ok, result.error
+        if previous is not None:
+            assert result.payload["preempted"] == [previous], (name, result.payload)
+        assert ex.active_behaviors == (name,)
+        previous = name
+
+
+def measure(activations: int, repeat: int) -> dict[str, Any]:
+    small_catalog = load_catalog(DEFAULT_CATALOG)
+    text = large_catalog_text()
+    t0 = time.perf_counter()
+    large_catalog = parse_catalog(text, "generated-10k.yaml")
+    load_s = time.perf_counter() - t0
+    errors = [d for d in large_catalog.diagnostics if d.severity.value == "error"]
+    assert not errors, errors[:3]
+    assert len(large_catalog.behaviors) == LARGE_BEHAVIORS
+    small, large = build(small_catalog), build(large_catalog)
+    small_plan, large_plan = plan(small_catalog, activations), plan(large_catalog, activations)
+    check_path(small, small_plan)
+    check_path(large, large_plan)
+    # Warm-up: one pass each (the specialist caches each behavior's capability expansion
+    # on first use; the large plan visits every group once per pass).
+    run(small, small_plan)
+    run(large, large_plan)
+    small_cpu: list[float] = []
+    large_cpu: list[float] = []
+    small_wall: list[float] = []
+    large_wall: list[float] = []
+    for _ in range(repeat):  # interleaved, so both see the same machine
+        cpu, wall = run(small, small_plan)
+        small_cpu.append(cpu)
+        small_wall.append(wall)
+        cpu, wall = run(large, large_plan)
+        large_cpu.append(cpu)
+        large_wall.append(wall)
+    return {
+        "small_behaviors": len(small_catalog.behaviors),
+        "large_behaviors": len(large_catalog.behaviors),
+        "large_lists": len(large_catalog.lists),
+        "large_capabilities": len(large_catalog.capabilities),
+        "large_load_s": load_s,
+        "small_rate": activations / min(small_cpu),
+        "large_rate": activations / min(large_cpu),
+        "small_wall_rate": activations / min(small_wall),
+        "large_wall_rate": activations / min(large_wall),
+        "ratio": min(large_cpu) / min(small_cpu),
+        "median_ratio": statistics.median(
+            lg / sm for lg, sm in zip(large_cpu, small_cpu, strict=True)
+        ),
+    }
+
+
+def profile(activations: int, large: bool) -> str:
+    catalog = parse_catalog(large_catalog_text()) if large else load_catalog(DEFAULT_CATALOG)
+    ex = build(catalog)
+    sequence = plan(catalog, activations)
+    run(ex, sequence)
+    profiler = cProfile.Profile()
+    profiler.enable()
+    run(ex, sequence)
+    profiler.disable()
+    out = io.StringIO()
+    pstats.Stats(profiler, stream=out).sort_stats("tottime").print_stats(25)
+    return out.getvalue()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--activations", type=int, default=12_000, help="per round")
+    parser.add_argument("--repeat", type=int, default=10, help="interleaved rounds")
+    parser.add_argument("--profile", action="store_true", help="print a cProfile of the loop")
+    args = parser.parse_args(argv)
+    if args.profile:
+        print(profile(args.activations, large=False))
+        print(profile(args.activations, large=True))
+    m = measure(args.activations, args.repeat)
+    rate_ok = m["small_rate"] >= RATE_TARGET
+    ratio_ok = m["ratio"] <= RATIO_TARGET
+    print(
+        f"activation benchmark: {args.repeat} interleaved rounds of {args.activations:,} "
+        "activations per catalog, recording off, NullVehicle, no behavior library"
+    )
+    print(
+        f"large catalog: {m['large_behaviors']:,} behaviors, {m['large_lists']:,} lists, "
+        f"{m['large_capabilities']:,} capabilities (parsed in {m['large_load_s']:.2f} s)"
+    )
+    print(
+        "figures: best round, CPU time of this process (wall clock in parentheses; the two "
+        "differ when the machine is shared)"
+    )
+    small_name = f"default catalog ({m['small_behaviors']} behaviors)"
+    large_name = f"{m['large_behaviors']:,}-behavior catalog"
+    rows = [
+        ("measure", "figure", "target", "status"),
+        (
+            f"activations/s, {small_name}",
+            f"{m['small_rate']:,.0f}/s ({m['small_wall_rate']:,.0f}/s)",
+            f">= {RATE_TARGET:,.0f}/s",
+            "ok" if rate_ok else "MISSED",
+        ),
+        (
+            f"activations/s, {large_name}",
+            f"{m['large_rate']:,.0f}/s ({m['large_wall_rate']:,.0f}/s)",
+            "",
+            "",
+        ),
+        (
+            f"cost ratio {m['large_behaviors']:,} / {m['small_behaviors']} behaviors",
+            f"{m['ratio']:.3f}x (median {m['median_ratio']:.3f}x)",
+            f"<= {RATIO_TARGET:.2f}x",
+            "ok" if ratio_ok else "MISSED",
+        ),
+    ]
+    widths = [max(len(r[i]) for r in rows) for i in range(4)]
+    for i, row in enumerate(rows):
+        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
+        if i == 0:
+            print("  ".join("-" * w for w in widths))
+    return 0 if rate_ok and ratio_ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
