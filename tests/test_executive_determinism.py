@@ -314,3 +314,36 @@ def test_event_times_are_clock_times() -> None:
     assert [r.log_time_ns for r in published] == [e.time_ns for e in ex.events]
     assert all(t % ex.clock.tick_ns == 0 for t in (e.time_ns for e in ex.events))
     assert {e.code for e in ex.events} == {EventCode.GOAL_ACHIEVED, EventCode.INTERRUPTED}
+
+
+def _state(ex: Executive) -> tuple[Any, ...]:
+    return (
+        tuple((n, ex.coordinator.active[n].uid) for n in ex.active_behaviors),
+        tuple(ex.events),
+        tuple(sorted(ex.capability_references.items())),
+        tuple(sorted((c, tuple(h)) for c, h in ex.resources.holders.items())),
+        ex.running_processes,
+        tuple(ex.beliefs.texts()),
+        ex.clock.now_ns(),
+    )
+
+
+def test_observing_does_not_change_behavior() -> None:
+    """With nobody observing, the core takes its fast path (no request payloads, no
+    closures); it must behave exactly as when observed: same results, events, active
+    set, references, processes and beliefs after every command -- and the same seq
+    numbering, so an observer attached later sees the numbers it would have seen."""
+    observed = Executive(DEFAULT, vehicle=NullVehicle(), library={}, observers=[MemoryObserver()])
+    quiet = Executive(DEFAULT, vehicle=NullVehicle(), library={})
+    for command in NULL_COMMANDS:
+        assert drive(observed, [command]) == drive(quiet, [command]), command
+        assert _state(observed) == _state(quiet), command
+    late = MemoryObserver()
+    quiet.bus.attach(late)
+    watcher = MemoryObserver()
+    observed.bus.attach(watcher)
+    for ex in (observed, quiet):
+        ex.activate_behavior("GO_TO_POINT", {"coordinates": [0, 0, 1]})
+        ex.inhibit_behavior("GO_TO_POINT")
+    assert [canonical(r) for r in late.records] == [canonical(r) for r in watcher.records]
+    assert late.calls()[0].seq > 100

@@ -300,6 +300,7 @@ class ExecutiveMachine(RuleBasedStateMachine):
         self.ex: Executive | None = None
         self.observer = MemoryObserver()
         self.catalog = DEFAULT
+        self.observed = True
         self.started_ns: dict[int, int] = {}
         self.last_uid = 0
 
@@ -341,9 +342,10 @@ class ExecutiveMachine(RuleBasedStateMachine):
     @initialize(data=st.data())
     def build(self, data: st.DataObject) -> None:
         self.catalog = data.draw(self.catalogs, label="catalog")
-        self.ex = Executive(
-            self.catalog, vehicle=NullVehicle(), library={}, observers=[self.observer]
-        )
+        # Unobserved, the core takes its fast path: it must keep the same invariants.
+        self.observed = data.draw(st.booleans(), label="observed")
+        observers = [self.observer] if self.observed else []
+        self.ex = Executive(self.catalog, vehicle=NullVehicle(), library={}, observers=observers)
         assert self.ex.initiation.ok, self.ex.initiation.error
 
     @rule(data=st.data())
@@ -496,7 +498,7 @@ class ExecutiveMachine(RuleBasedStateMachine):
 
     @invariant()
     def published_lists_match(self) -> None:
-        if self.ex is None:
+        if self.ex is None or not self.observed:
             return
         behaviors = self.observer.topics("list_of_active_behaviors")
         if behaviors:
