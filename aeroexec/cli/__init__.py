@@ -7,6 +7,8 @@ from aeroexec.cli import run_cmd  # noqa: F401  (registers `run`)
 from aeroexec.cli import recording_cmd  # noqa: F401  (registers `info`, `recover`)
 from aeroexec.cli import verify_cmd  # noqa: F401  (registers `verify`)
 from aeroexec.cli import view_cmd  # noqa: F401  (registers `view`)
+from aeroexec.cli import replay_cmd  # noqa: F401  (registers `replay`)
+from aeroexec.cli import diff_cmd  # noqa: F401  (registers `diff`)
 from aeroexec.cli.app import app
 
 
