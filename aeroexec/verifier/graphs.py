@@ -8,14 +8,16 @@ Graphs (networkx):
 * `conflict_graph` — undirected, capabilities, an edge per declared
   `incompatible_capabilities` pair (symmetric, as the executive reads it);
 * `requires_graph` — directed, capability -> each capability it requires;
-* `start_order_graph` — directed, the order in which things must start: a capability
-  before its first process, each process before the next, the last process of a
-  capability before the next capability of a behavior's list, and before every
-  capability that requires it; every edge says which behavior or capability imposes it;
-* `preemption_graph` — directed, A -> B when activating A stops B (built on demand;
-  it can be quadratic in the size of a list);
+* `start_order_graph` — directed, what must start before what: process -> process
+  (a capability's process order), last process -> "capability up", "capability up" ->
+  the first not-yet-running process of the next capability in a behavior's list or of
+  a capability that requires it; every edge says which behaviors or capabilities
+  impose it;
+* `preemption_graph` — directed, A -> B when activating A stops B (built on demand:
+  it is quadratic in the size of a list, so no rule needs it);
+* `incompatibility_graph` — its undirected version (A and B cannot run together);
 * `asymmetric_preemption_graph` — the edges A -> B of the preemption digraph whose
-  reverse B -> A is missing.
+  reverse B -> A is missing (built from set differences, linear in the relation).
 """
 
 from __future__ import annotations
@@ -388,6 +390,10 @@ class CatalogGraphs:
                 if victim in self.catalog.behaviors
             )
         return graph
+
+    @cached_property
+    def incompatibility_graph(self) -> nx.Graph:
+        return self.preemption_graph.to_undirected(as_view=False)
 
     def preempting_list(self, a: str, b: str) -> tuple[int, str] | None:
         """(index in A's incompatible_lists, list name) through which A preempts B."""
