@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from aeroexec.cli import catalog_cmd  # noqa: F401  (registers `catalog`)
 from aeroexec.cli import run_cmd  # noqa: F401  (registers `run`)
+from aeroexec.cli import fly_cmd  # noqa: F401  (registers `fly`)
+from aeroexec.cli import mavsim_cmd  # noqa: F401  (registers `mavsim`)
 from aeroexec.cli import recording_cmd  # noqa: F401  (registers `info`, `recover`)
 from aeroexec.cli import verify_cmd  # noqa: F401  (registers `verify`)
 from aeroexec.cli import view_cmd  # noqa: F401  (registers `view`)

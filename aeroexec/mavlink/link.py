@@ -33,8 +33,8 @@ Tap = Callable[[str, Any], None]
 MAX_DATAGRAM = 65535
 #: Raw bytes of rejected datagrams are recorded for the first this-many only.
 MAX_REJECTED_RECORDS = 1000
-#: How many (seq, type) pairs of the latest packets sent are kept (see `LinkStats.tail`).
-TAIL_LENGTH = 256
+#: How many of the latest packets sent are remembered (see `LinkStats.tail`).
+TAIL_LENGTH = 1024
 
 
 @dataclass(frozen=True, slots=True)
@@ -52,8 +52,9 @@ class LinkStats:
     rejected: Counter[str] = field(default_factory=Counter)
     corrupted: Counter[str] = field(default_factory=Counter)
     unsent: Counter[str] = field(default_factory=Counter)
-    #: (seq, type) of the latest packets sent, oldest first.
-    tail: deque[tuple[int, str]] = field(default_factory=lambda: deque(maxlen=TAIL_LENGTH))
+    #: (seq, type, corrupted) of the latest packets sent, oldest first: with the seq of
+    #: the last packet the peer recorded, what was still in flight when it stopped.
+    tail: deque[tuple[int, str, bool]] = field(default_factory=lambda: deque(maxlen=TAIL_LENGTH))
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -148,7 +149,7 @@ class Link:
         finally:
             self.mav.seq = (seq + 1) % 256
         self.stats.sent[kind] += 1
-        self.stats.tail.append((seq, kind))
+        self.stats.tail.append((seq, kind, corrupt))
         if corrupt:
             self.stats.corrupted[kind] += 1
         if self.tap is not None:

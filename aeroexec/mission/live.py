@@ -1,0 +1,201 @@
+"""A live session: catalog + MAVLink autopilot + mission script -> outcome (+ recording).
+
+`fly()` is what `aeroexec fly` does: the live counterpart of `session.simulate()`. The
+same executive core and behavior library run on the wall clock (`WallClock`) against a
+`MavlinkVehicle`; every MAVLink packet exchanged is published on the executive's bus
+(`mavlink/tx`, `mavlink/rx`, plus `mavlink/rejected` and `mavlink/link`), so the
+recorder writes it beside the executive's own channels.
+
+Vehicle faults: the standard behaviors watch progress, not `VehicleState.fault`. Live,
+a lost link or a mode the pilot (or the autopilot's own failsafe) switched to must end
+the running motion behaviors at once, so `LiveExecutive` ends them with
+`PROCESS_FAILURE` ("vehicle fault: link_lost") after the step in which the fault
+appears.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+from aeroexec import __version__
+from aeroexec.catalog.loader import load_catalog
+from aeroexec.catalog.model import Catalog
+from aeroexec.catalog.paths import DEFAULT_CATALOG
+from aeroexec.executive.behavior import Behavior
+from aeroexec.executive.bus import BusObserver
+from aeroexec.executive.clock import WallClock
+from aeroexec.executive.executive import Executive
+from aeroexec.executive.messages import EventCode
+from aeroexec.mavlink.codec import signing_key
+from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
+from aeroexec.mavlink.vehicle import FAILSAFES, Failsafe, MavlinkConfig, MavlinkVehicle
+from aeroexec.mission.activity import ActivityLog
+from aeroexec.mission.api import MissionAPI
+from aeroexec.mission.script import MissionScript, load_mission, run_script
+from aeroexec.mission.session import SessionResult
+from aeroexec.vehicles.base import VehicleCommandError
+
+#: Faults (prefixes) that end running motion behaviors with PROCESS_FAILURE.
+MOTION_FAULTS = ("link_lost", "mode_changed")
+
+
+@dataclass(frozen=True)
+class FlightConfig:
+    mission: str | Path
+    connect: str = DEFAULT_GCS_URL
+    catalog: str | Path = DEFAULT_CATALOG
+    record: str | Path | None = None
+    drone: str = "drone1"
+    heartbeat_timeout: float = 3.0
+    failsafe: Failsafe = "hold"
+    #: `--signing-key`: 64 hex digits, or a passphrase (hashed with SHA-256).
+    signing_key: str | None = None
+    allow_remote: bool = False
+    connect_timeout: float = 10.0
+    ack_timeout: float = 1.0
+    retries: int = 2
+
+    def vehicle_config(self) -> MavlinkConfig:
+        """The vehicle's configuration; `MavlinkError` for values that cannot work."""
+        key = None
+        if self.signing_key is not None:
+            try:
+                key = signing_key(self.signing_key)
+            except ValueError as exc:
+                raise MavlinkError(f"--signing-key: {exc}") from None
+        if self.failsafe not in FAILSAFES:
+            raise MavlinkError(f"--failsafe must be one of {', '.join(FAILSAFES)}")
+        try:
+            return MavlinkConfig(
+                url=self.connect,
+                allow_remote=self.allow_remote,
+                signing_key=key,
+                heartbeat_timeout=self.heartbeat_timeout,
+                failsafe=self.failsafe,
+                connect_timeout=self.connect_timeout,
+                ack_timeout=self.ack_timeout,
+                retries=self.retries,
+            )
+        except ValueError as exc:
+            raise MavlinkError(str(exc)) from None
+
+
+def _is_motion(behavior: Behavior) -> bool:
+    from aeroexec.behaviors import Land
+    from aeroexec.behaviors._support import MotionBehavior
+
+    return isinstance(behavior, (MotionBehavior, Land))
+
+
+class LiveExecutive(Executive):
+    """An `Executive` that turns a vehicle fault into PROCESS_FAILURE of the running
+    motion behaviors (see the module docstring). Everything else is the core's."""
+
+    def step(self) -> None:
+        super().step()
+        fault = self.vehicle.state().fault
+        if not fault.startswith(MOTION_FAULTS):
+            return
+        for name in self.active_behaviors:
+            behavior = self.coordinator.active.get(name)
+            if behavior is not None and behavior.running and _is_motion(behavior):
+                behavior.finish(EventCode.PROCESS_FAILURE, f"vehicle fault: {fault}")
+
+
+def fly(
+    config: FlightConfig,
+    observers: Iterable[BusObserver] = (),
+    *,
+    catalog: Catalog | None = None,
+    script: MissionScript | None = None,
+    catalog_text: str | None = None,
+    on_listening: Callable[[MavlinkVehicle], None] | None = None,
+    on_connected: Callable[[MavlinkVehicle], None] | None = None,
+) -> SessionResult:
+    """Fly one mission on a live autopilot. Unreadable inputs (mission, catalog, URL,
+    key) raise `AeroexecError`s before the link opens; no heartbeat raises `MavlinkError`
+    before any recording file is created."""
+    catalog = catalog if catalog is not None else load_catalog(config.catalog)
+    script = script if script is not None else load_mission(config.mission)
+    vehicle_config = config.vehicle_config()
+    parse_endpoint(config.connect, allow_remote=config.allow_remote)
+    clock = WallClock()
+    vehicle = MavlinkVehicle(vehicle_config)
+    recorder = None
+    try:
+        if on_listening is not None:
+            on_listening(vehicle)
+        vehicle.connect()
+        if on_connected is not None:
+            on_connected(vehicle)
+        metadata = {
+            "aeroexec_version": __version__,
+            "clock": clock.kind,
+            "vehicle": vehicle.kind,
+            "drone": config.drone,
+            "catalog": Path(str(config.catalog)).name,
+            "mission": Path(script.path).name,
+            "connect": vehicle.endpoint.url,
+            "autopilot_system": str(vehicle.target[0] if vehicle.target else ""),
+            "signing": "yes" if vehicle_config.signing_key is not None else "no",
+            "failsafe": config.failsafe,
+            "heartbeat_timeout_s": f"{config.heartbeat_timeout:g}",
+        }
+        activity = ActivityLog()
+        all_observers: list[BusObserver] = [activity, *observers]
+        if config.record is not None:
+            from aeroexec.recording import Recorder
+
+            recorder = Recorder(
+                config.record,
+                drone=config.drone,
+                metadata=metadata,
+                attachments={
+                    "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
+                    "mission.py": script.text,
+                },
+            )
+            all_observers.append(recorder)
+        executive = LiveExecutive(
+            catalog, vehicle=vehicle, clock=clock, observers=all_observers, drone=config.drone
+        )
+        vehicle.tap = executive.bus.publish  # hands over the traffic of the connection too
+        try:
+            outcome = run_script(script, MissionAPI(executive))
+        except KeyboardInterrupt:
+            # Stopped by the operator: leave the aircraft braking and holding, not
+            # flying on toward its last setpoint.
+            try:
+                if vehicle.state().flying:
+                    vehicle.hover()
+            except VehicleCommandError:
+                pass
+            raise
+        finally:
+            vehicle.step(0.0)  # what arrived since the last tick is recorded too
+            executive.bus.publish("mavlink/stats", lambda: _stats(vehicle))
+    finally:
+        if recorder is not None:
+            recorder.close()
+        vehicle.close()
+    losses = vehicle.link_losses
+    link_summary = vehicle.stats.summary()
+    if losses:
+        link_summary += f"; link lost {losses} time{'s' if losses > 1 else ''}"
+    return SessionResult(
+        outcome=outcome,
+        activations=tuple(activity.rows),
+        duration_s=executive.now_s,
+        final_state=vehicle.state(),
+        recording=str(config.record) if config.record is not None else None,
+        # The recorded metadata plus, after the fact, what went over the link.
+        metadata={**metadata, "link_summary": link_summary},
+    )
+
+
+def _stats(vehicle: MavlinkVehicle) -> dict[str, object]:
+    stats = vehicle.stats.as_dict()
+    stats.pop("tail", None)
+    return {**stats, "link_losses": vehicle.link_losses}

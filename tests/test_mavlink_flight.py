@@ -1,0 +1,498 @@
+"""Whole missions over MAVLink: `aeroexec mavsim` in a subprocess as the autopilot,
+`aeroexec fly` (a subprocess, or `fly()` in-process) as the ground station, real UDP on
+loopback, ports chosen free per test. Every process is bounded (`--duration`,
+timeouts) and killed at teardown if still alive.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import random
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections import Counter
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+from typer.testing import CliRunner
+
+from aeroexec.cli import app
+from aeroexec.executive.bus import MemoryObserver
+from aeroexec.mavlink.codec import new_codec
+from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
+from aeroexec.mission.live import FlightConfig, fly
+from aeroexec.mission.paths import APPENDIX_C
+from aeroexec.recording import open_recording
+from aeroexec.recording.reader import RecordedTopic
+
+PY = sys.executable
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+SPEED = "5"  # mavsim runs the vehicle 5x faster than the wall clock ...
+HEARTBEAT_HZ = "4"  # ... and beats 4 times a second, so arming and modes show sooner
+
+
+class Proc:
+    """A subprocess whose stdout lines are collected by a thread (so the test can wait
+    for one without blocking forever)."""
+
+    def __init__(self, args: list[str]) -> None:
+        self.popen = subprocess.Popen(
+            [PY, "-m", "aeroexec", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        self.lines: queue.Queue[str] = queue.Queue()
+        self.out: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.popen.stdout is not None
+        for line in self.popen.stdout:
+            self.out.append(line)
+            self.lines.put(line)
+
+    def wait_for(self, text: str, timeout: float = 15.0) -> str:
+        deadline = time.monotonic() + timeout
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise AssertionError(f"no line with {text!r}; got {''.join(self.out)}")
+            try:
+                line = self.lines.get(timeout=remaining)
+            except queue.Empty:
+                continue
+            if text in line:
+                return line
+
+    def finish(self, timeout: float = 40.0) -> tuple[int, str, str]:
+        assert self.popen.stderr is not None
+        code = self.popen.wait(timeout)
+        err = self.popen.stderr.read()
+        self._reader.join(5)
+        return code, "".join(self.out), err
+
+    def stop(self) -> None:
+        if self.popen.poll() is None:
+            self.popen.send_signal(signal.SIGTERM)
+            try:
+                self.popen.wait(10)
+            except subprocess.TimeoutExpired:
+                self.popen.kill()
+                self.popen.wait(5)
+
+    def kill(self) -> None:
+        if self.popen.poll() is None:
+            self.popen.kill()
+            self.popen.wait(5)
+        for stream in (self.popen.stdout, self.popen.stderr):
+            if stream is not None:
+                stream.close()
+
+
+@pytest.fixture
+def procs() -> Iterator[list[Proc]]:
+    started: list[Proc] = []
+    yield started
+    for proc in started:
+        proc.kill()
+
+
+def start_mavsim(procs: list[Proc], port: int, stats: Path, *extra: str) -> Proc:
+    proc = Proc(
+        [
+            "mavsim",
+            "--connect",
+            f"udpout:127.0.0.1:{port}",
+            "--speed-factor",
+            SPEED,
+            "--heartbeat-hz",
+            HEARTBEAT_HZ,
+            "--duration",
+            "45",
+            "--stats",
+            str(stats),
+            *extra,
+        ]
+    )
+    procs.append(proc)
+    proc.wait_for("mavsim: ArduCopter")
+    return proc
+
+
+def stop_mavsim(proc: Proc, stats: Path) -> dict[str, Any]:
+    proc.stop()
+    assert proc.popen.returncode == 0
+    return json.loads(stats.read_text())
+
+
+def write_mission(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "mission.py"
+    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
+    return path
+
+
+# -- the thesis' mission, end to end, recorded ---------------------------------------------------
+
+
+def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
+    tmp_path: Path, procs: list[Proc]
+) -> None:
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    stats_path = tmp_path / "mavsim.json"
+    flight = Proc(
+        ["fly", str(APPENDIX_C), "--connect", f"udpin:127.0.0.1:{port}", "--record", str(record)]
+    )
+    procs.append(flight)
+    flight.wait_for("waiting for a heartbeat")  # bound: nothing mavsim sends is lost
+    # Every 97th packet mavsim sends has a broken CRC.
+    mavsim = start_mavsim(procs, port, stats_path, "--corrupt-every", "97")
+    flight.wait_for("mavlink: autopilot system 1")
+    # Meanwhile a stranger sprays garbage at the ground station's port.
+    stranger = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rng = random.Random(9)
+    for _ in range(25):
+        stranger.sendto(
+            bytes(rng.randrange(256) for _ in range(rng.randrange(1, 80))), ("127.0.0.1", port)
+        )
+    stranger.close()
+    started = time.monotonic()
+    flight.wait_for("7 activations:", timeout=30)  # the summary: fly closed its socket
+    stats = stop_mavsim(mavsim, stats_path)
+    code, out, err = flight.finish()
+    took = time.monotonic() - started
+
+    assert code == 0, err
+    assert err == ""
+    assert took < 20.0
+    ends = [line for line in out.splitlines() if "] end " in line]
+    assert len(ends) == 7
+    for line in ends:
+        if "PAY_ATTENTION_TO_VISUAL_MARKERS" in line:
+            assert "INTERRUPTED" in line and "(inhibited)" in line  # the script inhibits it
+        else:
+            assert "GOAL_ACHIEVED" in line, line
+    assert "7 activations: 6 GOAL_ACHIEVED, 0 rejected" in out
+    assert stats["final"]["mode"] == "LAND" and not stats["final"]["armed"]
+    assert stats["final"]["yaw_deg"] == pytest.approx(-90.0, abs=1.0)  # ROTATE angle=-90
+    assert stats["rejected"] == {}
+
+    recording = open_recording(record)
+    assert recording.complete
+    topics: dict[str, list[Any]] = {}
+    for item in recording.records():
+        if isinstance(item, RecordedTopic):
+            topics.setdefault(item.name, []).append(item.data)
+    tx, rx = topics["mavlink/tx"], topics["mavlink/rx"]
+    rejected = Counter(r["reason"] for r in topics["mavlink/rejected"])
+    # Ground station -> vehicle: everything fly sent is what mavsim received, by type.
+    assert Counter(r["type"] for r in tx) == Counter(stats["received"])
+    # Vehicle -> ground station: what mavsim sent = recorded + corrupted + in flight when
+    # fly closed its socket (mavsim still sent until it was stopped), by type. The
+    # in-flight packets are the ones after the last recorded packet's seq in mavsim's tail.
+    last = (rx[-1]["seq"], rx[-1]["type"])
+    tail = [tuple(entry) for entry in stats["tail"]]
+    cut = max(i for i, entry in enumerate(tail) if entry[:2] == last)
+    in_flight = tail[cut + 1 :]
+    # Fewer than 256 in flight: no seq wrapped among them, so the cut is unambiguous.
+    assert len(in_flight) < 256, len(in_flight)
+    corrupted = Counter(stats["corrupted"])
+    for kind, sent in stats["sent"].items():
+        flying_ok = sum(1 for _, t, bad in in_flight if t == kind and not bad)
+        flying_bad = sum(1 for _, t, bad in in_flight if t == kind and bad)
+        recorded = sum(1 for r in rx if r["type"] == kind)
+        assert recorded + flying_ok + (corrupted[kind] - flying_bad) == sent, kind
+    assert sum(corrupted.values()) > 0
+    assert rejected["bad_crc"] == sum(corrupted.values()) - sum(1 for e in in_flight if e[2])
+    assert rejected["foreign_address"] == 25  # the stranger's datagrams, all of them
+    assert all(not r.get("ignored") for r in rx)
+    # The recording's own summary agrees, and the link events are there.
+    (final_stats,) = topics["mavlink/stats"]
+    assert final_stats["rejected"]["foreign_address"] == 25
+    assert [e["event"] for e in topics["mavlink/link"]] == ["connected"]
+    events = [e["code"] for e in topics["behavior_event"]]
+    assert events.count("GOAL_ACHIEVED") == 6
+
+
+# -- link loss --------------------------------------------------------------------------------
+
+
+def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
+    tmp_path: Path, procs: list[Proc]
+) -> None:
+    port = free_udp_port()
+    stats_path = tmp_path / "mavsim.json"
+    # The take-off takes ~0.7 s of wall time, then GO_TO_POINT 40 m north ~4 s more;
+    # heartbeats stop 1.2 s after the take-off, for 2 s; fly calls the link lost after
+    # 1 s without one, so in the middle of GO_TO_POINT.
+    mavsim = start_mavsim(procs, port, stats_path, "--drop-heartbeats-at", "1.2", "--drop-for", "2")
+    mission = write_mission(
+        tmp_path,
+        "    took_off = api.executeBehavior('TAKE_OFF')\n"
+        "    went = api.executeBehavior('GO_TO_POINT', coordinates=[0, 40, 1])\n"
+        "    turned = api.executeBehavior('ROTATE', angle=90)\n"
+        "    for _ in range(8):  # until the failsafe has landed it\n"
+        "        if not api.trueBelief('flying(self)'):\n"
+        "            break\n"
+        "        api.executeBehavior('WAIT', duration=1)\n"
+        "    return took_off, went, turned, api.trueBelief('flying(self)')\n",
+    )
+    memory = MemoryObserver()
+    result = fly(
+        FlightConfig(
+            mission=mission,
+            connect=f"udpin:127.0.0.1:{port}",
+            heartbeat_timeout=1.0,
+            failsafe="land",
+        ),
+        observers=[memory],
+    )
+    stats = stop_mavsim(mavsim, stats_path)
+
+    assert result.outcome.returned
+    assert result.outcome.value == ("GOAL_ACHIEVED", "PROCESS_FAILURE", "PROCESS_FAILURE", False)
+    rows = {a.behavior: a for a in result.activations}
+    assert rows["GO_TO_POINT"].detail == "vehicle fault: link_lost"
+    # A command while the link is down is refused by the vehicle: a clean failure too.
+    assert "set_yaw: refused, link lost (no heartbeat for 1 s)" in rows["ROTATE"].detail
+    events = [e["event"] for e in memory.topics("mavlink/link")]
+    assert events == ["connected", "lost", "restored", "failsafe"]
+    assert memory.topics("mavlink/link")[-1]["action"] == "land"
+    assert stats["dropped_heartbeats"] >= 1
+    # The failsafe's LAND reached the vehicle after the link came back, and it landed
+    # short of the goal it was flying to.
+    modes = [c for c in stats["commands"] if c["command"] == "MAV_CMD_DO_SET_MODE"]
+    assert [c["result"] for c in modes] == ["ACCEPTED", "ACCEPTED"]  # GUIDED, then LAND
+    assert stats["final"]["mode"] == "LAND" and not stats["final"]["flying"]
+    assert stats["final"]["position"][1] < 39.0
+    assert not result.final_state.flying
+
+
+# -- refusals ---------------------------------------------------------------------------------
+
+
+def test_a_refused_command_fails_its_behavior_and_the_mission_goes_on(
+    tmp_path: Path, procs: list[Proc]
+) -> None:
+    port = free_udp_port()
+    stats_path = tmp_path / "mavsim.json"
+    mavsim = start_mavsim(procs, port, stats_path, "--refuse", "MAV_CMD_CONDITION_YAW")
+    mission = write_mission(
+        tmp_path,
+        "    results = [api.executeBehavior('TAKE_OFF')]\n"
+        "    results.append(api.executeBehavior('ROTATE', angle=90))\n"
+        "    results.append(api.executeBehavior('GO_TO_POINT', relative_coordinates=[1, 0, 0]))\n"
+        "    results.append(api.executeBehavior('LAND'))\n"
+        "    return results\n",
+    )
+    result = fly(FlightConfig(mission=mission, connect=f"udpin:127.0.0.1:{port}"))
+    stats = stop_mavsim(mavsim, stats_path)
+
+    assert result.outcome.value == [
+        "GOAL_ACHIEVED",
+        "PROCESS_FAILURE",
+        "GOAL_ACHIEVED",
+        "GOAL_ACHIEVED",
+    ]
+    rotate = next(a for a in result.activations if a.behavior == "ROTATE")
+    assert rotate.detail == (
+        "on_start failed: VehicleCommandError: MAV_CMD_CONDITION_YAW refused: TEMPORARILY_REJECTED"
+    )
+    yaw_commands = [c for c in stats["commands"] if c["command"] == "MAV_CMD_CONDITION_YAW"]
+    assert yaw_commands == [
+        {
+            "command": "MAV_CMD_CONDITION_YAW",
+            "result": "TEMPORARILY_REJECTED",
+            "t": yaw_commands[0]["t"],
+        }
+    ]  # refused once, not retried: a refusal is an answer
+    assert stats["final"]["position"][0] == pytest.approx(1.0, abs=0.06)  # went 1 m east
+    assert stats["final"]["yaw_deg"] == pytest.approx(0.0, abs=0.5)  # never turned
+
+
+# -- signing ----------------------------------------------------------------------------------
+
+
+def test_a_signed_link_flies_and_an_unsigned_sender_is_rejected(
+    tmp_path: Path, procs: list[Proc]
+) -> None:
+    port = free_udp_port()
+    stats_path = tmp_path / "mavsim.json"
+    mavsim = start_mavsim(procs, port, stats_path, "--signing-key", "pass phrase")
+    mission = write_mission(
+        tmp_path,
+        "    return [api.executeBehavior('TAKE_OFF'), api.executeBehavior('LAND')]\n",
+    )
+    signed_traffic = MemoryObserver()
+    signed = fly(
+        FlightConfig(mission=mission, connect=f"udpin:127.0.0.1:{port}", signing_key="pass phrase"),
+        observers=[signed_traffic],
+    )
+    # The same vehicle, now from a ground station without the key.
+    unsigned_traffic = MemoryObserver()
+    unsigned = fly(
+        FlightConfig(
+            mission=mission, connect=f"udpin:127.0.0.1:{port}", ack_timeout=0.2, retries=1
+        ),
+        observers=[unsigned_traffic],
+    )
+    stats = stop_mavsim(mavsim, stats_path)
+
+    assert signed.outcome.value == ["GOAL_ACHIEVED", "GOAL_ACHIEVED"]
+    rx, tx = signed_traffic.topics("mavlink/rx"), signed_traffic.topics("mavlink/tx")
+    assert rx and tx and all(r["signed"] for r in rx + tx)
+    # Without the key, every command goes unanswered: TAKE_OFF fails, LAND is refused
+    # (not flying). mavsim rejected exactly what the unsigned station sent.
+    assert unsigned.outcome.value == ["PROCESS_FAILURE", "ERROR"]
+    take_off = unsigned.activations[0]
+    assert take_off.detail.endswith(
+        "MAV_CMD_DO_SET_MODE: no COMMAND_ACK after 2 attempts (0.2 s each)"
+    )
+    unsigned_tx = unsigned_traffic.topics("mavlink/tx")
+    assert unsigned_tx and not any(r["signed"] for r in unsigned_tx)
+    assert stats["rejected"] == {"bad_signature": len(unsigned_tx)}
+    assert Counter(stats["received"]) == Counter(r["type"] for r in tx)
+
+
+# -- the command line's bad input ------------------------------------------------------------
+
+
+def test_garbage_and_no_autopilot_exit_2_with_one_line(tmp_path: Path, procs: list[Proc]) -> None:
+    port = free_udp_port()
+    flight = Proc(
+        ["fly", str(APPENDIX_C), "--connect", f"udpin:127.0.0.1:{port}", "--connect-timeout", "1"]
+    )
+    procs.append(flight)
+    flight.wait_for("waiting for a heartbeat")
+    sender = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rng = random.Random(5)
+    for _ in range(40):
+        sender.sendto(
+            bytes(rng.randrange(256) for _ in range(rng.randrange(1, 120))), ("127.0.0.1", port)
+        )
+    gcs = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3).pack(new_codec(254, 1))
+    sender.sendto(bytes(gcs), ("127.0.0.1", port))  # a GCS is no autopilot
+    sender.sendto(bytes(gcs)[:9], ("127.0.0.1", port))  # a cut-off packet
+    sender.close()
+    code, _, err = flight.finish()
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(
+        f"aeroexec: error: no heartbeat from udpin:127.0.0.1:{port} within 1 s ("
+    )
+    assert "packets rejected)" in lines[0] and "Traceback" not in err
+
+
+def test_a_signed_ground_station_ignores_an_unsigned_vehicle(tmp_path: Path) -> None:
+    port = free_udp_port()
+    sim = MavSim(MavSimConfig(url=f"udpout:127.0.0.1:{port}"))
+    stop = threading.Event()
+    thread = threading.Thread(target=sim.run, args=(stop.is_set,), daemon=True)
+    thread.start()
+    try:
+        result = CliRunner().invoke(
+            app,
+            [
+                "fly",
+                str(APPENDIX_C),
+                "--connect",
+                f"udpin:127.0.0.1:{port}",
+                "--signing-key",
+                "pass phrase",
+                "--connect-timeout",
+                "1",
+            ],
+        )
+    finally:
+        stop.set()
+        thread.join(5)
+        sim.close()
+    assert result.exit_code == 2
+    assert f"no heartbeat from udpin:127.0.0.1:{port} within 1 s (" in result.output
+    assert "bad_signature packets rejected" in result.output
+    assert sim.link.stats.sent["HEARTBEAT"] >= 1  # it did speak, unsigned
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--connect", "tcp:127.0.0.1:5760"], "unsupported connection 'tcp:127.0.0.1:5760'"),
+        (["--connect", "udpin:0.0.0.0:14550"], "is not a loopback address; pass --allow-remote"),
+        (["--failsafe", "panic"], "--failsafe must be one of hold, land"),
+        (["--heartbeat-timeout", "0"], "heartbeat timeout must be positive"),
+        (["--signing-key", " "], "--signing-key: the signing key is empty"),
+    ],
+)
+def test_bad_fly_options_exit_2_with_one_line(args: list[str], message: str) -> None:
+    result = CliRunner().invoke(app, ["fly", str(APPENDIX_C), *args])
+    assert result.exit_code == 2
+    assert result.output.strip().splitlines() == [f"aeroexec: error: {message}"] or (
+        message in result.output and len(result.output.strip().splitlines()) == 1
+    )
+
+
+def test_a_missing_mission_exits_2_before_any_link_opens(tmp_path: Path) -> None:
+    missing = tmp_path / "nope.py"
+    result = CliRunner().invoke(app, ["fly", str(missing)])
+    assert result.exit_code == 2
+    assert result.output.strip() == f"{missing}: error: no such file"
+
+
+def test_allow_remote_lets_a_non_loopback_endpoint_through(tmp_path: Path) -> None:
+    port = free_udp_port()
+    result = CliRunner().invoke(
+        app,
+        [
+            "fly",
+            str(APPENDIX_C),
+            "--connect",
+            f"udpin:0.0.0.0:{port}",
+            "--allow-remote",
+            "--connect-timeout",
+            "0.3",
+        ],
+    )
+    assert result.exit_code == 2
+    assert f"no heartbeat from udpin:0.0.0.0:{port} within 0.3 s" in result.output
+
+
+def test_fly_and_mavsim_defaults_are_loopback() -> None:
+    fly_help = CliRunner().invoke(app, ["fly", "--help"]).output
+    mavsim_help = CliRunner().invoke(app, ["mavsim", "--help"]).output
+    assert "udpin:127.0.0.1:14550" in fly_help
+    assert "udpout:127.0.0.1:14550" in mavsim_help
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["--refuse", "MAV_CMD_FLY_TO_THE_MOON"],
+            "unknown MAVLink command 'MAV_CMD_FLY_TO_THE_MOON'",
+        ),
+        (["--speed-factor", "0"], "speed factor must be positive"),
+        (["--connect", "udpout:10.0.0.1:14550"], "not a loopback address"),
+    ],
+)
+def test_bad_mavsim_options_exit_2_with_one_line(args: list[str], message: str) -> None:
+    result = CliRunner().invoke(app, ["mavsim", "--duration", "0.1", *args])
+    assert result.exit_code == 2
+    assert message in result.output and len(result.output.strip().splitlines()) == 1
