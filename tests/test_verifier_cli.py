@@ -188,8 +188,14 @@ def test_sarif_validates_against_the_2_1_0_schema(args: tuple[str, ...]) -> None
     for result in run_["results"]:
         assert rules[result["ruleIndex"]]["id"] == result["ruleId"]
         assert result["level"] in ("error", "warning", "note")
-        region = result["locations"][0]["physicalLocation"]["region"]
-        assert region["startLine"] >= 1
+        location = result["locations"][0]["physicalLocation"]
+        assert location["region"]["startLine"] >= 1
+        artifact = location["artifactLocation"]
+        if artifact.get("uriBaseId") == "%SRCROOT%":
+            base = run_["originalUriBaseIds"]["%SRCROOT%"]["uri"]
+            assert (Path(base.removeprefix("file://")) / artifact["uri"]).exists()
+        else:
+            assert artifact["uri"].startswith("file:///")
 
 
 def test_sarif_schema_rejects_a_broken_document() -> None:

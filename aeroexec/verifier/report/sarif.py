@@ -21,13 +21,21 @@ SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
 _LEVELS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.INFO: "note"}
 
 
-def artifact_uri(file: str) -> str:
-    """A URI reference for a path: relative paths stay relative (what code scanning
-    resolves against the repository root); absolute ones become file:// URIs."""
+SRCROOT = "%SRCROOT%"
+
+
+def artifact_location(file: str, root: Path) -> dict[str, str]:
+    """A relative URI reference against %SRCROOT% (the working directory) for files
+    under it — what code scanning resolves against the repository root — else an
+    absolute file:// URI."""
     path = Path(file)
     if path.is_absolute():
-        return path.as_uri()
-    return quote(PurePosixPath(*path.parts).as_posix(), safe="/")
+        try:
+            path = path.relative_to(root)
+        except ValueError:
+            return {"uri": path.as_uri()}
+    uri = quote(PurePosixPath(*path.parts).as_posix(), safe="/")
+    return {"uri": uri, "uriBaseId": SRCROOT}
 
 
 def _rule(rule: Rule) -> dict[str, Any]:
@@ -44,8 +52,8 @@ def _rule(rule: Rule) -> dict[str, Any]:
     return entry
 
 
-def _result(finding: Finding, index: dict[str, int]) -> dict[str, Any]:
-    location: dict[str, Any] = {"artifactLocation": {"uri": artifact_uri(finding.file)}}
+def _result(finding: Finding, index: dict[str, int], root: Path) -> dict[str, Any]:
+    location: dict[str, Any] = {"artifactLocation": artifact_location(finding.file, root)}
     if finding.line > 0:
         region: dict[str, int] = {"startLine": finding.line}
         if finding.column > 0:
@@ -66,7 +74,8 @@ def _result(finding: Finding, index: dict[str, int]) -> dict[str, Any]:
     return result
 
 
-def to_sarif(report: Report) -> dict[str, Any]:
+def to_sarif(report: Report, root: Path | None = None) -> dict[str, Any]:
+    root = (root or Path.cwd()).resolve()
     rules = all_rules()
     index = {rule.code: i for i, rule in enumerate(rules)}
     return {
@@ -81,8 +90,9 @@ def to_sarif(report: Report) -> dict[str, Any]:
                         "rules": [_rule(rule) for rule in rules],
                     }
                 },
+                "originalUriBaseIds": {SRCROOT: {"uri": root.as_uri() + "/"}},
                 "columnKind": "unicodeCodePoints",
-                "results": [_result(f, index) for f in report.findings],
+                "results": [_result(f, index, root) for f in report.findings],
             }
         ],
     }
