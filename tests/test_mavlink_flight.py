@@ -192,7 +192,7 @@ def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
     assert "7 activations: 6 GOAL_ACHIEVED, 0 rejected" in out
     assert stats["final"]["mode"] == "LAND" and not stats["final"]["armed"]
     assert stats["final"]["yaw_deg"] == pytest.approx(-90.0, abs=1.0)  # ROTATE angle=-90
-    assert stats["rejected"] == {}
+    assert stats["rejected"] == {} and stats["ignored"] == {}
 
     recording = open_recording(record)
     assert recording.complete
@@ -398,7 +398,10 @@ def test_garbage_and_no_autopilot_exit_2_with_one_line(tmp_path: Path, procs: li
     assert lines[0].startswith(
         f"aeroexec: error: no heartbeat from udpin:127.0.0.1:{port} within 1 s ("
     )
-    assert "packets rejected)" in lines[0] and "Traceback" not in err
+    # 40 random datagrams (each one rejection at least), the cut-off packet, and the
+    # GCS heartbeat (a good packet, but no autopilot's) are all accounted for.
+    assert "bad_prefix" in lines[0] and " truncated" in lines[0]
+    assert "1 before_heartbeat ignored)" in lines[0] and "Traceback" not in err
 
 
 def test_a_signed_ground_station_ignores_an_unsigned_vehicle(tmp_path: Path) -> None:
@@ -427,7 +430,7 @@ def test_a_signed_ground_station_ignores_an_unsigned_vehicle(tmp_path: Path) -> 
         sim.close()
     assert result.exit_code == 2
     assert f"no heartbeat from udpin:127.0.0.1:{port} within 1 s (" in result.output
-    assert "bad_signature packets rejected" in result.output
+    assert " bad_signature rejected)" in result.output
     assert sim.link.stats.sent["HEARTBEAT"] >= 1  # it did speak, unsigned
 
 
@@ -454,6 +457,19 @@ def test_a_missing_mission_exits_2_before_any_link_opens(tmp_path: Path) -> None
     result = CliRunner().invoke(app, ["fly", str(missing)])
     assert result.exit_code == 2
     assert result.output.strip() == f"{missing}: error: no such file"
+
+
+def test_a_port_already_taken_exits_2_instead_of_sharing_it() -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as other_station:
+        other_station.bind(("127.0.0.1", 0))
+        port = other_station.getsockname()[1]
+        result = CliRunner().invoke(
+            app, ["fly", str(APPENDIX_C), "--connect", f"udpin:127.0.0.1:{port}"]
+        )
+    assert result.exit_code == 2
+    assert result.output.strip() == (
+        f"aeroexec: error: cannot open udpin:127.0.0.1:{port}: Address already in use"
+    )
 
 
 def test_allow_remote_lets_a_non_loopback_endpoint_through(tmp_path: Path) -> None:

@@ -16,9 +16,9 @@ from aeroexec.mission.live import FlightConfig, fly
 
 
 def _listening(vehicle: MavlinkVehicle) -> None:
-    host, port = vehicle.link.local_address
     typer.echo(
-        f"mavlink: {vehicle.endpoint.url} (local {host}:{port}), waiting for a heartbeat...",
+        f"mavlink: {vehicle.endpoint.url} (local {vehicle.link.local_text}), "
+        "waiting for a heartbeat..."
     )
 
 
@@ -91,7 +91,7 @@ def fly_command(
     try:
         result = fly(config, observers=printer, on_listening=_listening, on_connected=_connected)
     except KeyboardInterrupt:
-        error_line("aeroexec: interrupted (the vehicle was told to hold)")
+        error_line("aeroexec: interrupted (a flying vehicle was told to brake and hold)")
         raise typer.Exit(130) from None
     print_summary(result)
     typer.echo(f"mavlink: {result.metadata.get('link_summary', '')}")

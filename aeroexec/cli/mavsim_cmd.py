@@ -95,10 +95,10 @@ def mavsim_command(
 
     signal.signal(signal.SIGTERM, _stop)
     signal.signal(signal.SIGINT, _stop)
-    host, port = sim.link.local_address
     typer.echo(
         f"mavsim: ArduCopter (GUIDED protocol) system {system_id} on {sim.endpoint.url} "
-        f"(local {host}:{port}), speed x{speed_factor:g}" + (", signed" if key is not None else "")
+        f"(local {sim.link.local_text}), speed x{speed_factor:g}"
+        + (", signed" if key is not None else "")
     )
     sys.stdout.flush()
     try:

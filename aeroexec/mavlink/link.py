@@ -33,6 +33,8 @@ Tap = Callable[[str, Any], None]
 MAX_DATAGRAM = 65535
 #: Raw bytes of rejected datagrams are recorded for the first this-many only.
 MAX_REJECTED_RECORDS = 1000
+#: Datagrams read per `poll()` at most, so a flood cannot keep the executive from running.
+MAX_DATAGRAMS_PER_POLL = 2000
 #: How many of the latest packets sent are remembered (see `LinkStats.tail`).
 TAIL_LENGTH = 1024
 
@@ -45,11 +47,14 @@ class Received:
 
 @dataclass
 class LinkStats:
-    """What went over the link, by message type; `rejected` by reason."""
+    """What went over the link, by message type. `rejected`: bytes that were no usable
+    packet or came from a stranger, by reason; `ignored`: good packets the owner did not
+    use (another system's, or before the autopilot's first heartbeat), by reason."""
 
     sent: Counter[str] = field(default_factory=Counter)
     received: Counter[str] = field(default_factory=Counter)
     rejected: Counter[str] = field(default_factory=Counter)
+    ignored: Counter[str] = field(default_factory=Counter)
     corrupted: Counter[str] = field(default_factory=Counter)
     unsent: Counter[str] = field(default_factory=Counter)
     #: (seq, type, corrupted) of the latest packets sent, oldest first: with the seq of
@@ -61,16 +66,28 @@ class LinkStats:
             "sent": dict(sorted(self.sent.items())),
             "received": dict(sorted(self.received.items())),
             "rejected": dict(sorted(self.rejected.items())),
+            "ignored": dict(sorted(self.ignored.items())),
             "corrupted": dict(sorted(self.corrupted.items())),
             "unsent": dict(sorted(self.unsent.items())),
             "tail": [list(item) for item in self.tail],
         }
 
     def summary(self) -> str:
-        rejected = sum(self.rejected.values())
-        reasons = ", ".join(f"{k} {v}" for k, v in sorted(self.rejected.items()))
         text = f"{sum(self.received.values())} received, {sum(self.sent.values())} sent"
-        return f"{text}, {rejected} rejected ({reasons})" if rejected else text
+        for name, counts in (("rejected", self.rejected), ("ignored", self.ignored)):
+            if counts:
+                reasons = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
+                text += f", {sum(counts.values())} {name} ({reasons})"
+        return text
+
+    def reasons(self) -> str:
+        """ "40 bad_prefix, 1 truncated rejected; 1 before_heartbeat ignored" (or "")."""
+        parts = []
+        for name, counts in (("rejected", self.rejected), ("ignored", self.ignored)):
+            if counts:
+                items = ", ".join(f"{v} {k}" for k, v in sorted(counts.items()))
+                parts.append(f"{items} {name}")
+        return "; ".join(parts)
 
 
 class Link:
@@ -97,7 +114,8 @@ class Link:
         try:
             self.sock.setblocking(False)
             if endpoint.direction == "udpin":
-                self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                # No SO_REUSEADDR: a second ground station on the same port must fail
+                # loudly, not silently share the vehicle's packets with the first.
                 self.sock.bind(endpoint.address)
                 self.peer: Address | None = None
                 self.locked = False
@@ -114,6 +132,12 @@ class Link:
     def local_address(self) -> Address:
         host, port = self.sock.getsockname()[:2]
         return (host, port)
+
+    @property
+    def local_text(self) -> str:
+        """`127.0.0.1:14550` or `[::1]:14550`."""
+        host, port = self.local_address
+        return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
     # -- peer ----------------------------------------------------------------------------
     def lock(self, address: Address) -> None:
@@ -170,7 +194,7 @@ class Link:
                 return out
             if not ready:
                 return out
-        while True:
+        for _ in range(MAX_DATAGRAMS_PER_POLL):
             try:
                 data, address = self.sock.recvfrom(MAX_DATAGRAM)
             except (BlockingIOError, InterruptedError):
@@ -209,8 +233,8 @@ class Link:
                 {"reason": bad.reason, "detail": bad.detail, "raw": _b64(bad.raw)},
             )
 
-    def count_rejected(self, reason: str) -> None:
-        self.stats.rejected[reason] += 1
+    def count_ignored(self, reason: str) -> None:
+        self.stats.ignored[reason] += 1
 
     def close(self) -> None:
         self.sock.close()

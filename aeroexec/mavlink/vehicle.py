@@ -224,10 +224,9 @@ class MavlinkVehicle:
                 f"heartbeat from {self.endpoint.url} but no LOCAL_POSITION_NED within "
                 f"{limit:g} s (has the autopilot a position estimate?)"
             )
-        rejected = self.link.stats.rejected
-        if rejected:
-            reasons = ", ".join(f"{n} {reason}" for reason, n in sorted(rejected.items()))
-            text += f" ({reasons} packets rejected)"
+        reasons = self.link.stats.reasons()
+        if reasons:
+            text += f" (packets: {reasons})"
         return text
 
     def _request_streams(self) -> None:
@@ -288,11 +287,11 @@ class MavlinkVehicle:
                     self.target = (src, msg.get_srcComponent())
                     self.link.lock(item.address)
                 else:
-                    self.link.count_rejected("before_heartbeat")
+                    self.link.count_ignored("before_heartbeat")
                     self.link.record_rx(msg, "before the autopilot's first heartbeat")
                     continue
             elif src != self.target[0]:
-                self.link.count_rejected("foreign_system")
+                self.link.count_ignored("foreign_system")
                 self.link.record_rx(msg, f"foreign system {src}")
                 continue
             self.link.record_rx(msg)
@@ -347,12 +346,14 @@ class MavlinkVehicle:
         ):
             self.link_lost = True
             self.link_losses += 1
+            self._velocity_ned = None  # the autopilot drops it too; never resumed
             self.link.unlock()
             self._event("lost", silent_s=round(now - self._last_heartbeat, 3))
         if self._velocity_ned is not None and now >= self._next_velocity and not self.link_lost:
             self._send_velocity(self._velocity_ned)
 
     def _run_failsafe(self) -> None:
+        self._velocity_ned = None
         if not self.telemetry.flying:
             self._event("failsafe", action="none", reason="not flying")
             return
@@ -435,6 +436,8 @@ class MavlinkVehicle:
         )
         self._commanded_mode = mode
         self.telemetry.custom_mode = mode  # the next heartbeat will say so too
+        if mode != GUIDED:
+            self._velocity_ned = None  # setpoints mean nothing outside GUIDED
 
     def _arm(self) -> None:
         self._command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
