@@ -1,0 +1,33 @@
+"""ROS 1 bags: read them (rosbags, with Aerostack's message definitions shipped in
+`aeroexec/data/msg/`), import them into the aeroexec MCAP profile without losing a byte,
+and let `info` and `replay` take them directly. See docs/bags.md.
+
+- `import_bag(bag, out.mcap, mapping=None, drone=None)` (importer.py) -> `ImportReport`;
+- `load_mapping(path | None)` (mapping.py): the topic mapping (default: Aerostack's names);
+- `open_bag(path)` (bagfile.py): a checked, streaming reader; `is_bag(path)`;
+- `bag_info(path)` (info.py): what `aeroexec info BAG` prints;
+- `replayable(path)` (anyfile.py): an MCAP path for a recording or a bag;
+- `aerostack_typestore()` (types.py): rosbags' Noetic store plus Aerostack's types.
+"""
+
+from __future__ import annotations
+
+from aeroexec.bags.bagfile import BagConnection, BagFile, is_bag, open_bag
+from aeroexec.bags.importer import ImportReport, import_bag
+from aeroexec.bags.mapping import Kind, Mapping, Rule, default_mapping_path, load_mapping
+from aeroexec.bags.types import aerostack_typestore
+
+__all__ = [
+    "BagConnection",
+    "BagFile",
+    "ImportReport",
+    "Kind",
+    "Mapping",
+    "Rule",
+    "aerostack_typestore",
+    "default_mapping_path",
+    "import_bag",
+    "is_bag",
+    "load_mapping",
+    "open_bag",
+]

@@ -1,0 +1,453 @@
+"""`import_bag`: a ROS 1 bag to an aeroexec-profile MCAP file, losing nothing.
+
+Every message of every connection is copied byte for byte to a raw `ros1` channel
+(`sink.py`); only the messages of mapped topics are decoded, to derive the aeroexec
+channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
+and coordinator calls (`reconstruct.py`), `list_of_active_capabilities`, `beliefs`,
+`process_state`, `vehicle/state` (+ `vehicle/pose`). Log times are the bag's. Messages are
+written in bag time order: reconstruction decides an input only when the 2 x grace
+after it has been read, so the messages from its horizon on wait in a small heap (about
+a second of bag time) until it has; within one instant the reconstructed commands come
+first, as the executive would have published them.
+
+The output is written next to the target and renamed into place at the end, so a bag
+that turns out damaged halfway leaves no half-written file behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import heapq
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from aeroexec import __version__
+from aeroexec.bags import extract
+from aeroexec.bags.bagfile import BagConnection, BagFile, open_bag
+from aeroexec.bags.derive import (
+    BeliefTracker,
+    CapabilityTracker,
+    ProcessTracker,
+    VehicleStateBuilder,
+)
+from aeroexec.bags.mapping import Kind, Mapping, Rule, check_drone, load_mapping
+from aeroexec.bags.reconstruct import ACTIVATE, INHIBIT, Reconstructor, Stats
+from aeroexec.bags.sink import COMPRESSIONS, RAW_PREFIX, ImportSink
+from aeroexec.bags.types import Decoder, TypeResolver
+from aeroexec.errors import Mark, RecordingError
+from aeroexec.recording.writer import METADATA_NAME
+
+#: The import's metadata: what replay and info read (clock and vehicle kinds).
+CLOCK = "wall"
+VEHICLE = "ros1-bag"
+BAG_METADATA = "ros1_bag"
+MAPPING_ATTACHMENT = "bag_mapping.yaml"
+_NS = 1_000_000_000
+_BEHAVIOR_KINDS = frozenset(
+    {Kind.BEHAVIOR_EVENT, Kind.ACTIVE_BEHAVIORS, Kind.ACTIVATE_COMMAND, Kind.INHIBIT_COMMAND}
+)
+
+
+@dataclass(frozen=True, slots=True)
+class ImportReport:
+    source: str
+    target: str
+    drone: str
+    #: Bag messages carried over (= the bag's message count) and connections.
+    messages: int
+    connections: int
+    topics: int
+    compression: str
+    start_ns: int | None
+    end_ns: int | None
+    #: Kind -> the bag topic it was taken from.
+    mapped: dict[str, str]
+    #: aeroexec topic -> messages derived.
+    derived: dict[str, int]
+    reconstructed_activations: int
+    reconstructed_inhibitions: int
+    notes: tuple[str, ...] = field(default=())
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "source": self.source,
+            "target": self.target,
+            "drone": self.drone,
+            "messages": self.messages,
+            "connections": self.connections,
+            "topics": self.topics,
+            "compression": self.compression,
+            "start_ns": self.start_ns,
+            "end_ns": self.end_ns,
+            "mapped": dict(self.mapped),
+            "derived": dict(self.derived),
+            "reconstructed": {
+                "activations": self.reconstructed_activations,
+                "inhibitions": self.reconstructed_inhibitions,
+            },
+            "notes": list(self.notes),
+        }
+
+    def summary(self) -> str:
+        lines = [
+            f"{self.source} -> {self.target}: {self.messages} messages on "
+            f"{self.topics} topics ({self.connections} connections, {self.compression}) "
+            f"carried over as raw ros1 channels under {RAW_PREFIX}/",
+        ]
+        for kind, topic in self.mapped.items():
+            lines.append(f"  {kind:<20} <- {topic}")
+        if self.derived:
+            derived = ", ".join(f"{t} {n}" for t, n in self.derived.items())
+            lines.append(f"  derived /{self.drone}/: {derived}")
+        if self.reconstructed_activations or self.reconstructed_inhibitions:
+            lines.append(
+                f"  reconstructed commands: {self.reconstructed_activations} activations, "
+                f"{self.reconstructed_inhibitions} inhibitions"
+            )
+        lines.extend(f"note: {note}" for note in self.notes)
+        return "\n".join(lines)
+
+
+class _Ordered:
+    """Writes messages in (time, rank, arrival) order. A message is held until bag time
+    has moved past its instant and past the reconstruction horizon, so that the
+    reconstructed commands and calls (rank 0) of an instant come before the other
+    messages of that instant (rank 1): the order in which the executive publishes them
+    (the capability and process changes of an activation follow its command)."""
+
+    RECONSTRUCTED = 0
+    OTHER = 1
+
+    def __init__(self) -> None:
+        self._heap: list[tuple[int, int, int, Callable[[], None]]] = []
+        self._order = 0
+
+    def put(self, time_ns: int, rank: int, action: Callable[[], None]) -> None:
+        self._order += 1
+        heapq.heappush(self._heap, (time_ns, rank, self._order, action))
+
+    def release(self, limit: int | None) -> None:
+        """Write every message before `limit` (everything when None)."""
+        heap = self._heap
+        while heap and (limit is None or heap[0][0] < limit):
+            heapq.heappop(heap)[3]()
+
+
+class _Import:
+    """One import run (state shared by the per-message handlers)."""
+
+    def __init__(self, bag: BagFile, mapping: Mapping, drone: str, sink: ImportSink) -> None:
+        self.bag = bag
+        self.drone = drone
+        self.sink = sink
+        self.notes: list[str] = []
+        self.out = _Ordered()
+        self.recon = Reconstructor(mapping.grace_ns)
+        self.vehicle = VehicleStateBuilder()
+        self.capabilities = CapabilityTracker()
+        self.beliefs = BeliefTracker()
+        self.processes = ProcessTracker()
+        self.undecodable: dict[str, int] = {}
+        self.unreadable: dict[str, int] = {}
+        self.selected = mapping.select(((c.topic, c.type) for c in bag.connections), drone)
+        self.handlers: dict[int, tuple[Kind, Decoder]] = {}
+        self._resolve(self.selected)
+        #: Behavior topics mapped: reconstruction may insert messages, so order matters.
+        self.reconstructing = any(kind in _BEHAVIOR_KINDS for kind, _ in self.handlers.values())
+
+    # -- set-up ------------------------------------------------------------------------------
+    def _resolve(self, selected: dict[Kind, Rule]) -> None:
+        resolver = TypeResolver()
+        for kind, rule in selected.items():
+            for connection in self.bag.connections:
+                if not rule.matches(connection.topic, connection.type, self.drone):
+                    continue
+                if rule.topic is None and connection.topic != self._first_topic(rule):
+                    continue  # a type-only rule takes one topic, the first of that type
+                try:
+                    decoder = resolver.decoder(
+                        connection.msgtype, connection.msgdef, connection.md5sum
+                    )
+                except ValueError as exc:
+                    self.notes.append(f"{connection.topic} not mapped as {kind.value}: {exc}")
+                    continue
+                if decoder.warning:
+                    self.notes.append(decoder.warning)
+                self.handlers[connection.id] = (kind, decoder)
+
+    def _first_topic(self, rule: Rule) -> str:
+        for connection in self.bag.connections:
+            if rule.matches(connection.topic, connection.type, self.drone):
+                return connection.topic
+        return ""
+
+    @property
+    def mapped(self) -> dict[str, str]:
+        topics: dict[str, str] = {}
+        for connection in self.bag.connections:
+            entry = self.handlers.get(connection.id)
+            if entry is not None:
+                topics.setdefault(entry[0].value, connection.topic)
+        return topics
+
+    # -- the pass ----------------------------------------------------------------------------
+    def run(self) -> None:
+        for connection in self.bag.connections:  # every connection, even without messages
+            self.sink.raw_channel(connection)
+        recon = self.recon
+        sink = self.sink
+        handlers = self.handlers
+        direct = True  # nothing held: a message may be written as it comes
+        for connection, time_ns, data in self.bag.messages():
+            if self.reconstructing:
+                recon.advance(time_ns)
+                self._take_reconstruction()
+                horizon = recon.horizon
+                self.out.release(time_ns if horizon is None else min(time_ns, horizon))
+                # Raw messages need no rank: with nothing older held, write at once.
+                direct = horizon is None
+            if direct:
+                sink.raw(connection, time_ns, data)
+            else:
+                self.out.put(time_ns, _Ordered.OTHER, _bind(sink.raw, connection, time_ns, data))
+            entry = handlers.get(connection.id)
+            if entry is not None:
+                self._handle(entry, connection, time_ns, data)
+        recon.finish()
+        self._take_reconstruction()
+        self.out.release(None)
+
+    def _take_reconstruction(self) -> None:
+        for output in self.recon.take():
+            action = _bind(
+                self.sink.derived_message, output.topic, output.time_ns, output.data, output.call
+            )
+            self.out.put(output.time_ns, _Ordered.RECONSTRUCTED, action)
+
+    def _derive(self, topic: str, time_ns: int, data: dict[str, Any]) -> None:
+        if not self.reconstructing:
+            self.sink.derived_message(topic, time_ns, data)
+            return
+        self.out.put(
+            time_ns, _Ordered.OTHER, _bind(self.sink.derived_message, topic, time_ns, data)
+        )
+
+    def _handle(
+        self, entry: tuple[Kind, Decoder], connection: BagConnection, time_ns: int, data: bytes
+    ) -> None:
+        kind, decoder = entry
+        try:
+            message = decoder.decode(data)
+        except Exception:  # SerdeError and friends: the raw copy is kept anyway
+            self.undecodable[connection.topic] = self.undecodable.get(connection.topic, 0) + 1
+            return
+        if not self._dispatch(kind, message, time_ns):
+            self.unreadable[connection.topic] = self.unreadable.get(connection.topic, 0) + 1
+
+    def _dispatch(self, kind: Kind, message: object, time_ns: int) -> bool:
+        """Feed one decoded message; False when it lacks the fields its kind needs."""
+        if kind is Kind.POSE:
+            pose = extract.pose(message)
+            if pose is None:
+                return False
+            self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
+        elif kind is Kind.VELOCITY:
+            velocity = extract.velocity(message)
+            if velocity is None:
+                return False
+            self.vehicle.velocity(velocity)
+        elif kind is Kind.BATTERY:
+            charge = extract.battery(message)
+            if charge is None:
+                return False
+            self.vehicle.battery(charge)
+        elif kind is Kind.FLIGHT_STATUS:
+            flying = extract.flying(message)
+            if flying is None:
+                return False
+            self.vehicle.flying(flying)
+        elif kind is Kind.BEHAVIOR_EVENT:
+            event = extract.event(message)
+            if event is None:
+                return False
+            self.recon.event(time_ns, event)
+        elif kind is Kind.ACTIVE_BEHAVIORS:
+            active = extract.active_list(message)
+            if active is None:
+                return False
+            self.recon.active_list(time_ns, active)
+        elif kind in (Kind.ACTIVATE_COMMAND, Kind.INHIBIT_COMMAND):
+            command = extract.command(message)
+            if command is None:
+                return False
+            self.recon.command(
+                time_ns, ACTIVATE if kind is Kind.ACTIVATE_COMMAND else INHIBIT, command
+            )
+        else:
+            return self._dispatch_lists(kind, message, time_ns)
+        return True
+
+    def _dispatch_lists(self, kind: Kind, message: object, time_ns: int) -> bool:
+        if kind is Kind.ACTIVE_CAPABILITIES:
+            names = extract.capabilities(message)
+            if names is None:
+                return False
+            payload = self.capabilities.update(names)
+            if payload is not None:
+                self._derive("list_of_active_capabilities", time_ns, payload)
+        elif kind is Kind.BELIEFS:
+            snapshot = extract.beliefs(message)
+            if snapshot is None:
+                return False
+            for change in self.beliefs.update(snapshot):
+                self._derive("beliefs", time_ns, change)
+        else:  # PROCESS_STATE
+            found = extract.process(message, self.drone)
+            if found is None:
+                return False
+            payload = self.processes.update(*found)
+            if payload is not None:
+                self._derive("process_state", time_ns, payload)
+        return True
+
+    # -- report ------------------------------------------------------------------------------
+    def final_notes(self) -> list[str]:
+        notes = list(self.notes)
+        for topic, n in sorted(self.undecodable.items()):
+            notes.append(f"{n} message(s) of {topic} could not be decoded (kept raw only)")
+        for topic, n in sorted(self.unreadable.items()):
+            notes.append(f"{n} message(s) of {topic} lack the fields of their kind (kept raw only)")
+        stats: Stats = self.recon.stats
+        for code, n in sorted(stats.unknown_codes.items()):
+            notes.append(
+                f"{n} behavior event(s) with code {code!r}, which has no aeroexec equivalent "
+                "(kept raw only; the activation counts as ended)"
+            )
+        if stats.late_events:
+            notes.append(
+                f"{stats.late_events} end event(s) came long after their behavior left the "
+                "active list (it was reconstructed as inhibited; kept raw only)"
+            )
+        if stats.bad_arguments:
+            notes.append(
+                f"{stats.bad_arguments} behavior argument text(s) were not a YAML mapping "
+                "(replaced by no arguments)"
+            )
+        selected = self.selected
+        if Kind.ACTIVE_BEHAVIORS in selected and Kind.BEHAVIOR_EVENT not in selected:
+            notes.append(
+                "the bag has active-behavior lists but no behavior events: every behavior "
+                "leaving the list is reconstructed as inhibited"
+            )
+        if Kind.BEHAVIOR_EVENT in selected and Kind.ACTIVE_BEHAVIORS not in selected:
+            notes.append(
+                "the bag has behavior events but no active-behavior list: each activation "
+                "is reconstructed at its end event (durations unknown)"
+            )
+        return notes
+
+
+def _bind(func: Callable[..., None], *args: Any) -> Callable[[], None]:
+    return lambda: func(*args)
+
+
+def _metadata(bag: BagFile, mapping: Mapping, drone: str) -> dict[str, dict[str, str]]:
+    return {
+        METADATA_NAME: {
+            "aeroexec_version": __version__,
+            "drone": drone,
+            "clock": CLOCK,
+            "vehicle": VEHICLE,
+            "source": Path(bag.name).name,
+            "mapping": mapping.source,
+            "grace_s": f"{mapping.grace_ns / _NS:g}",
+        },
+        BAG_METADATA: {
+            "file": Path(bag.name).name,
+            "format": "2.0",
+            "bytes": str(bag.size),
+            "compression": bag.compression_text,
+            "chunks": str(bag.chunk_count),
+            "connections": str(len(bag.connections)),
+            "messages": str(bag.message_count),
+            "start_ns": "" if bag.start_ns is None else str(bag.start_ns),
+            "end_ns": "" if bag.end_ns is None else str(bag.end_ns),
+        },
+    }
+
+
+def import_bag(
+    bag_path: str | os.PathLike[str],
+    output: str | os.PathLike[str],
+    mapping: Mapping | str | os.PathLike[str] | None = None,
+    drone: str | None = None,
+    compression: str = "lz4",
+) -> ImportReport:
+    """Import `bag_path` into the MCAP file `output` (see the module docstring).
+    `mapping`: a `Mapping`, a mapping file, or None for the shipped Aerostack one;
+    `drone`: the namespace (default: the mapping's). `RecordingError` (one line) when the
+    bag, the mapping or the output cannot be used; then no output file is left."""
+    if compression not in COMPRESSIONS:
+        raise ValueError(f"compression must be one of {sorted(COMPRESSIONS)}")
+    if not isinstance(mapping, Mapping):
+        mapping = load_mapping(mapping)
+    drone = check_drone(drone if drone is not None else mapping.drone, Mark("--drone"))
+    if f"/{drone}" == RAW_PREFIX:
+        raise RecordingError(f"drone {drone!r} is reserved for the raw channels", Mark("--drone"))
+    target = Path(output)
+    with open_bag(bag_path) as bag:
+        if target.exists() and target.resolve() == bag.path.resolve():
+            raise RecordingError("the output would overwrite the bag", Mark(str(output)))
+        try:
+            handle, temp = tempfile.mkstemp(
+                prefix=f".{target.name}.", suffix=".partial", dir=target.parent or None
+            )
+        except OSError as exc:
+            raise RecordingError(
+                f"cannot write: {exc.strerror or exc}", Mark(str(output))
+            ) from None
+        try:
+            with os.fdopen(handle, "wb") as stream:
+                sink = ImportSink(stream, drone, compression)
+                run = _Import(bag, mapping, drone, sink)
+                sink.start(
+                    _metadata(bag, mapping, drone),
+                    {MAPPING_ATTACHMENT: mapping.text.encode("utf-8")},
+                )
+                run.run()
+                sink.finish()
+            os.replace(temp, target)
+        except OSError as exc:
+            _remove(temp)
+            raise RecordingError(
+                f"cannot write: {exc.strerror or exc}", Mark(str(output))
+            ) from None
+        except BaseException:
+            _remove(temp)
+            raise
+        stats = run.recon.stats
+        return ImportReport(
+            source=bag.name,
+            target=str(output),
+            drone=drone,
+            messages=sink.raw_messages,
+            connections=len(bag.connections),
+            topics=len({c.topic for c in bag.connections}),
+            compression=bag.compression_text,
+            start_ns=bag.start_ns,
+            end_ns=bag.end_ns,
+            mapped=run.mapped,
+            derived=dict(sink.derived),
+            reconstructed_activations=stats.activations,
+            reconstructed_inhibitions=stats.inhibitions,
+            notes=tuple(run.final_notes()),
+        )
+
+
+def _remove(path: str) -> None:
+    with contextlib.suppress(OSError):
+        os.unlink(path)

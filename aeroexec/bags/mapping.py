@@ -1,0 +1,222 @@
+"""Topic mapping: which bag topics are behavior events, active lists, commands, poses...
+
+A mapping is a YAML file (the shipped default, `aeroexec/data/bag_mapping/aerostack.yaml`,
+has Aerostack's 2017-2018 names)::
+
+    version: 1
+    drone: drone1          # what {drone} stands for (the import's --drone overrides it)
+    grace_s: 0.5           # how far apart related messages may be (see reconstruct.py)
+    topics:
+      - {topic: "/{drone}/behavior_event", kind: behavior_event}
+      - {topic: "/{drone}/EstimatedPose_droneGMR_wrt_GFF", kind: pose}
+      - {type: geometry_msgs/PoseStamped, kind: pose}      # any topic of this type
+
+A rule names a `topic` (exact, after `{drone}` is replaced), a ROS 1 `type`, or both.
+For each kind the **first rule that the bag has** is used and the later ones of that kind
+are ignored, so a mapping can list fallbacks in order of preference. Every topic of the
+bag is carried over unchanged whatever the mapping says; the mapping only adds the
+aeroexec channels derived from it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass
+from enum import Enum
+from importlib import resources
+from pathlib import Path
+
+from aeroexec.catalog.yamlnodes import YNode, load_yaml
+from aeroexec.errors import CatalogError, Mark, RecordingError
+
+#: The mapping format's version (the `version:` key).
+FORMAT_VERSION = 1
+DEFAULT_GRACE_S = 0.5
+DEFAULT_MAPPING_NAME = "aerostack.yaml"
+
+
+class Kind(str, Enum):
+    """What a mapped topic is (and which aeroexec channel it feeds)."""
+
+    BEHAVIOR_EVENT = "behavior_event"  # -> behavior_event
+    ACTIVE_BEHAVIORS = "active_behaviors"  # -> list_of_active_behaviors (+ reconstruction)
+    ACTIVE_CAPABILITIES = "active_capabilities"  # -> list_of_active_capabilities
+    BELIEFS = "beliefs"  # -> beliefs (changes between snapshots)
+    PROCESS_STATE = "process_state"  # -> process_state (started/stopped changes)
+    ACTIVATE_COMMAND = "activate_command"  # -> mission/command activate_behavior
+    INHIBIT_COMMAND = "inhibit_command"  # -> mission/command inhibit_behavior
+    POSE = "pose"  # -> vehicle/state position, yaw
+    VELOCITY = "velocity"  # -> vehicle/state velocity
+    BATTERY = "battery"  # -> vehicle/state battery
+    FLIGHT_STATUS = "flight_status"  # -> vehicle/state flying
+
+
+_RULE_KEYS = ("topic", "type", "kind")
+_TOP_KEYS = ("version", "drone", "grace_s", "topics")
+
+
+@dataclass(frozen=True, slots=True)
+class Rule:
+    kind: Kind
+    topic: str | None  # may contain {drone}
+    type: str | None  # ROS 1 spelling, `pkg/Name`
+    mark: Mark
+
+    def topic_for(self, drone: str) -> str | None:
+        return None if self.topic is None else self.topic.replace("{drone}", drone)
+
+    def matches(self, topic: str, ros1_type: str, drone: str) -> bool:
+        wanted = self.topic_for(drone)
+        if wanted is not None and wanted != topic:
+            return False
+        return self.type is None or self.type == ros1_type
+
+    def describe(self) -> str:
+        parts = [p for p in (self.topic, self.type) if p]
+        return " ".join(parts)
+
+
+@dataclass(frozen=True, slots=True)
+class Mapping:
+    rules: tuple[Rule, ...]
+    drone: str
+    grace_ns: int
+    #: Where it came from (file name), and its text (kept as an attachment of the import).
+    source: str
+    text: str
+
+    def select(self, topics: Iterable[tuple[str, str]], drone: str) -> dict[Kind, Rule]:
+        """For each kind, the first rule that one of `topics` ((topic, ROS 1 type) pairs)
+        matches."""
+        present = list(topics)
+        chosen: dict[Kind, Rule] = {}
+        for rule in self.rules:
+            if rule.kind in chosen:
+                continue
+            if any(rule.matches(topic, typ, drone) for topic, typ in present):
+                chosen[rule.kind] = rule
+        return chosen
+
+
+def default_mapping_path() -> Path:
+    return Path(
+        str(resources.files("aeroexec").joinpath("data", "bag_mapping", DEFAULT_MAPPING_NAME))
+    )
+
+
+def load_mapping(path: str | os.PathLike[str] | None = None) -> Mapping:
+    """The mapping in `path` (the shipped Aerostack default when None). `RecordingError`
+    with file:line:col for anything wrong in it."""
+    file = Path(path) if path is not None else default_mapping_path()
+    name = str(path) if path is not None else DEFAULT_MAPPING_NAME
+    if file.is_dir():
+        raise RecordingError("is a directory, not a mapping file", Mark(name))
+    try:
+        text = file.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise RecordingError("not a text file (invalid UTF-8)", Mark(name)) from None
+    except OSError as exc:
+        raise RecordingError(f"cannot read: {exc.strerror or exc}", Mark(name)) from None
+    return parse_mapping(text, name)
+
+
+def parse_mapping(text: str, name: str) -> Mapping:
+    try:
+        root = load_yaml(text, name)
+    except CatalogError as exc:  # the YAML layer speaks of catalogs; this is a mapping
+        raise RecordingError(exc.message, exc.mark) from None
+    if root is None or not root.is_map:
+        raise RecordingError(
+            "a mapping file is a YAML mapping with a `topics:` list",
+            root.mark if root is not None else Mark(name, 1, 1),
+        )
+    _no_unknown_keys(root, _TOP_KEYS, "top level")
+    version = root.get("version")
+    if version is not None and version.value != FORMAT_VERSION:
+        raise RecordingError(
+            f"unsupported mapping version {version.value!r} (this aeroexec reads {FORMAT_VERSION})",
+            version.mark,
+        )
+    drone = _drone(root.get("drone"))
+    grace_ns = _grace(root.get("grace_s"))
+    topics = root.get("topics")
+    if topics is None:
+        raise RecordingError("missing `topics:` (the list of mapped topics)", root.mark)
+    if not topics.is_list:
+        raise RecordingError("`topics:` must be a list of {topic, type, kind}", topics.mark)
+    rules = tuple(_rule(item) for item in topics.value)
+    return Mapping(rules, drone, grace_ns, name, text)
+
+
+def check_drone(value: object, mark: Mark) -> str:
+    """A drone namespace: one topic segment, letters, digits and _."""
+    if not isinstance(value, str) or not value or not value.replace("_", "").isalnum():
+        raise RecordingError(
+            f"drone must be one topic name segment (letters, digits, _), not {value!r}", mark
+        )
+    return value
+
+
+def _drone(node: YNode | None) -> str:
+    if node is None:
+        return "drone1"
+    return check_drone(node.value, node.mark)
+
+
+def _grace(node: YNode | None) -> int:
+    if node is None:
+        return round(DEFAULT_GRACE_S * 1e9)
+    value = node.value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RecordingError(f"grace_s must be a number of seconds, not {value!r}", node.mark)
+    if not math.isfinite(value) or not 0 <= value <= 60:
+        raise RecordingError(f"grace_s must be between 0 and 60 seconds, not {value!r}", node.mark)
+    return round(value * 1e9)
+
+
+def _rule(item: YNode) -> Rule:
+    if not item.is_map:
+        raise RecordingError("each topics entry is a mapping {topic, type, kind}", item.mark)
+    _no_unknown_keys(item, _RULE_KEYS, "topics entry")
+    kind_node = item.get("kind")
+    if kind_node is None:
+        raise RecordingError("missing `kind:`", item.mark)
+    try:
+        kind = Kind(kind_node.value)
+    except ValueError:
+        known = ", ".join(k.value for k in Kind)
+        raise RecordingError(
+            f"unknown kind {kind_node.value!r} (known: {known})", kind_node.mark
+        ) from None
+    topic = _text(item.get("topic"), "topic")
+    typ = _text(item.get("type"), "type")
+    if topic is None and typ is None:
+        raise RecordingError("a topics entry needs a `topic:`, a `type:` or both", item.mark)
+    if topic is not None and not topic.startswith("/"):
+        mark = item.get("topic").mark  # type: ignore[union-attr]
+        raise RecordingError(f"topic {topic!r} must be absolute (start with /)", mark)
+    if typ is not None:
+        typ = typ.replace("/msg/", "/")
+        if typ.count("/") != 1 or typ.startswith("/") or typ.endswith("/"):
+            mark = item.get("type").mark  # type: ignore[union-attr]
+            raise RecordingError(f"type {typ!r} must be package/Name", mark)
+    return Rule(kind, topic, typ, item.mark)
+
+
+def _text(node: YNode | None, key: str) -> str | None:
+    if node is None:
+        return None
+    if not isinstance(node.value, str) or not node.value.strip():
+        raise RecordingError(f"{key} must be a non-empty string, not {node.value!r}", node.mark)
+    return node.value.strip()
+
+
+def _no_unknown_keys(node: YNode, allowed: tuple[str, ...], where: str) -> None:
+    for key, _ in node.items():
+        if key not in allowed:
+            mark = node.key_marks.get(key, node.mark)
+            raise RecordingError(
+                f"unknown key {key!r} in {where} (allowed: {', '.join(allowed)})", mark
+            )

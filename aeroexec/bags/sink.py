@@ -1,0 +1,158 @@
+"""The MCAP side of an import: an aeroexec-profile file with two kinds of channels.
+
+* Raw channels, one per bag connection, topic `/ros1<original topic>` (e.g.
+  `/ros1/drone1/behavior_event`): schema encoding `ros1msg` (the connection's message
+  definition, named with its ROS 1 type), message encoding `ros1`, the serialized bytes
+  exactly as in the bag; channel metadata `topic` (the original name), `md5sum`,
+  `callerid` and `latching` when the bag has them. The prefix keeps them apart from the
+  aeroexec channels, several of which have Aerostack's own names
+  (`/drone1/behavior_event`), while Foxglove and `mcap` still decode them as ROS 1.
+* aeroexec channels `/<drone>/<name>` with the profile's JSON Schemas (what the
+  `Recorder` writes; see aeroexec/recording/schemas.py).
+
+Messages are written in the order given (the importer gives bag time order); sequence
+numbers count messages from 0. Nothing depends on the clock or the host, so the same
+bag and mapping give the same file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import IO, Any
+
+from mcap.writer import CompressionType, Writer
+
+from aeroexec.bags.bagfile import BagConnection
+from aeroexec.recording.schemas import (
+    FOXGLOVE_POSE,
+    MESSAGE_ENCODING,
+    PROFILE,
+    SCHEMA_ENCODING,
+    SERVICE_CALL,
+    schema_for,
+    schema_name_for_topic,
+)
+from aeroexec.recording.writer import LIBRARY, METADATA_NAME, encode_json, pose_message
+
+RAW_PREFIX = "/ros1"
+RAW_SCHEMA_ENCODING = "ros1msg"
+RAW_MESSAGE_ENCODING = "ros1"
+COMPRESSIONS = {
+    "lz4": CompressionType.LZ4,
+    "zstd": CompressionType.ZSTD,
+    "none": CompressionType.NONE,
+}
+CHUNK_SIZE = 1024 * 1024
+
+
+def raw_topic(topic: str) -> str:
+    return RAW_PREFIX + topic
+
+
+class ImportSink:
+    def __init__(self, stream: IO[bytes], drone: str, compression: str = "lz4") -> None:
+        self._writer = Writer(stream, chunk_size=CHUNK_SIZE, compression=COMPRESSIONS[compression])
+        self._prefix = f"/{drone}/"
+        self._schemas: dict[tuple[str, str, bytes], int] = {}
+        self._raw: dict[int, int] = {}  # bag connection id -> channel id
+        self._json: dict[str, int] = {}  # aeroexec topic -> channel id
+        self._sequence = 0
+        self._call_seq = 0
+        #: aeroexec topic -> messages written (derived channels only).
+        self.derived: dict[str, int] = {}
+        self.raw_messages = 0
+
+    def start(
+        self, metadata: Mapping[str, Mapping[str, str]], attachments: Mapping[str, bytes]
+    ) -> None:
+        self._writer.start(profile=PROFILE, library=LIBRARY)
+        for name, values in metadata.items():
+            self._writer.add_metadata(name, dict(values))
+        for name, data in attachments.items():
+            self._writer.add_attachment(
+                create_time=0, log_time=0, name=name, media_type="application/yaml", data=data
+            )
+
+    # -- channels ----------------------------------------------------------------------------
+    def _schema(self, name: str, encoding: str, data: bytes) -> int:
+        key = (name, encoding, data)
+        schema = self._schemas.get(key)
+        if schema is None:
+            schema = self._writer.register_schema(name=name, encoding=encoding, data=data)
+            self._schemas[key] = schema
+        return schema
+
+    def raw_channel(self, connection: BagConnection) -> int:
+        channel = self._raw.get(connection.id)
+        if channel is None:
+            schema = self._schema(
+                connection.type, RAW_SCHEMA_ENCODING, connection.msgdef.encode("utf-8")
+            )
+            metadata = {"topic": connection.topic, "md5sum": connection.md5sum}
+            if connection.callerid is not None:
+                metadata["callerid"] = connection.callerid
+            if connection.latching is not None:
+                metadata["latching"] = "true" if connection.latching else "false"
+            channel = self._writer.register_channel(
+                topic=raw_topic(connection.topic),
+                message_encoding=RAW_MESSAGE_ENCODING,
+                schema_id=schema,
+                metadata=metadata,
+            )
+            self._raw[connection.id] = channel
+        return channel
+
+    def _json_channel(self, topic: str, schema_name: str) -> int:
+        channel = self._json.get(topic)
+        if channel is None:
+            definition = schema_for(schema_name)
+            schema = self._schema(definition.name, SCHEMA_ENCODING, definition.data)
+            channel = self._writer.register_channel(
+                topic=self._prefix + topic,
+                message_encoding=MESSAGE_ENCODING,
+                schema_id=schema,
+                metadata={},
+            )
+            self._json[topic] = channel
+        return channel
+
+    # -- messages ----------------------------------------------------------------------------
+    def raw(self, connection: BagConnection, log_time_ns: int, data: bytes) -> None:
+        self._add(self.raw_channel(connection), log_time_ns, data)
+        self.raw_messages += 1
+
+    def derived_message(
+        self, topic: str, log_time_ns: int, data: dict[str, Any], call: bool = False
+    ) -> None:
+        """An aeroexec-profile message on `/<drone>/<topic>` (`call`: a service call
+        record, numbered here in write order)."""
+        if call:
+            data = {"seq": self._call_seq, "parent_seq": None, **data}
+            self._call_seq += 1
+            channel = self._json_channel(topic, SERVICE_CALL)
+        else:
+            channel = self._json_channel(topic, schema_name_for_topic(topic))
+        self._add(channel, log_time_ns, encode_json(data))
+        self.derived[topic] = self.derived.get(topic, 0) + 1
+        if topic == "vehicle/state":
+            pose = pose_message(data, log_time_ns)
+            if pose is not None:
+                channel = self._json_channel("vehicle/pose", FOXGLOVE_POSE)
+                self._add(channel, log_time_ns, encode_json(pose))
+                self.derived["vehicle/pose"] = self.derived.get("vehicle/pose", 0) + 1
+
+    def _add(self, channel: int, log_time_ns: int, data: bytes) -> None:
+        self._writer.add_message(
+            channel_id=channel,
+            log_time=log_time_ns,
+            data=data,
+            publish_time=log_time_ns,
+            sequence=self._sequence,
+        )
+        self._sequence += 1
+
+    def finish(self) -> None:
+        self._writer.finish()
+
+
+__all__ = ["METADATA_NAME", "RAW_PREFIX", "ImportSink", "raw_topic"]
