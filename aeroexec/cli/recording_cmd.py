@@ -8,6 +8,8 @@ from typing import Annotated
 
 import typer
 
+from aeroexec.bags.bagfile import is_bag
+from aeroexec.bags.info import bag_info
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.recording.info import recording_info
 from aeroexec.recording.recover import recover as recover_file
@@ -27,7 +29,9 @@ def info(
     recording: Annotated[
         str,
         typer.Argument(
-            metavar="REC", help="An MCAP file (aeroexec or any other profile).", show_default=False
+            metavar="REC",
+            help="An MCAP file (aeroexec or any other profile) or a ROS 1 bag.",
+            show_default=False,
         ),
     ],
     output_format: Annotated[
@@ -51,7 +55,7 @@ def info(
     Exit codes: 0 read (completely or up to damage, which is reported on stderr);
     2 nothing could be read (missing, empty, not MCAP): one line on stderr.
     """
-    report = recording_info(recording)
+    report = bag_info(recording) if is_bag(recording) else recording_info(recording)
     if output_format is InfoFormat.json:
         typer.echo(report.to_json())
     else:

@@ -20,6 +20,7 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
+from aeroexec.bags.bagfile import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
@@ -102,6 +103,10 @@ def choose_catalog(run: RecordedRun, path: str | None) -> ChosenCatalog:
 def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
     """Replay one recording and diff it against the original. Input problems raise
     `AeroexecError` (unreadable, not MCAP, no mission commands, bad catalog)."""
+    if is_bag(path):  # a ROS 1 bag: replayed through a temporary import (aeroexec.bags)
+        from aeroexec.bags.replay import replay_bag
+
+        return replay_bag(path, options)
     name = str(path)
     run = read_run(path)
     notes: list[str] = []
