@@ -34,18 +34,27 @@ class Bus:
     def __init__(self, clock: Clock) -> None:
         self.clock = clock
         self._observers: list[BusObserver] = []
+        #: Whether anyone observes (a plain attribute: the hot path reads it often).
+        self.observed = False
         self._seq = 0
         self._stack: list[int] = []
 
     def attach(self, observer: BusObserver) -> None:
         self._observers.append(observer)
+        self.observed = True
 
     def detach(self, observer: BusObserver) -> None:
         self._observers.remove(observer)
+        self.observed = bool(self._observers)
 
-    @property
-    def observed(self) -> bool:
-        return bool(self._observers)
+    def quiet(self) -> bool:
+        """Nobody observes: take the next call's seq number and return True, so the
+        caller runs its handler directly, without building closures or payloads (the
+        activation hot path). With observers: False, and the caller uses `call`."""
+        if self.observed:
+            return False
+        self._seq += 1
+        return True
 
     def call(
         self,

@@ -42,6 +42,8 @@ class BehaviorCoordinator:
         self, name: str, arguments: Mapping[str, Any] | None = None, caller: str = "mission"
     ) -> ServiceResult:
         args = dict(arguments or {})
+        if self.bus.quiet():
+            return self._activate(name, args)
         return self.bus.call(
             "activate_behavior",
             caller,
@@ -50,6 +52,8 @@ class BehaviorCoordinator:
         )
 
     def inhibit_behavior(self, name: str, caller: str = "mission") -> ServiceResult:
+        if self.bus.quiet():
+            return self._inhibit(name)
         return self.bus.call(
             "inhibit_behavior", caller, lambda: self._inhibit(name), lambda: {"behavior": name}
         )
@@ -62,8 +66,13 @@ class BehaviorCoordinator:
         form = self.specialist.check_behavior_format(COORDINATOR, name, arguments)
         if not form.ok:
             return form
-        situation = self.bus.call(
-            f"behavior_{name.lower()}/check_situation", COORDINATOR, behavior.situation
+        bus = self.bus
+        situation = (
+            behavior.situation()
+            if bus.quiet()
+            else bus.call(
+                f"behavior_{name.lower()}/check_situation", COORDINATOR, behavior.situation
+            )
         )
         if not situation.ok:
             return situation
@@ -79,11 +88,16 @@ class BehaviorCoordinator:
             for victim in victims:
                 self.active[victim].finish(EventCode.INTERRUPTED, f"preempted by {name}")
             self.resources.release_unneeded(keep_for=name)
-            started = self.bus.call(
-                f"behavior_{name.lower()}/start",
-                COORDINATOR,
-                lambda: behavior.start(uid, form.payload["arguments"], defaults.payload["timeout"]),
-                lambda: {"uid": uid, "arguments": form.payload["arguments"]},
+            validated, timeout = form.payload["arguments"], defaults.payload["timeout"]
+            started = (
+                behavior.start(uid, validated, timeout)
+                if bus.quiet()
+                else bus.call(
+                    f"behavior_{name.lower()}/start",
+                    COORDINATOR,
+                    lambda: behavior.start(uid, validated, timeout),
+                    lambda: {"uid": uid, "arguments": validated},
+                )
             )
             if started.ok and behavior.running:
                 self.active[name] = behavior
@@ -96,11 +110,14 @@ class BehaviorCoordinator:
         behavior = self.active.get(name)
         if behavior is None:
             return failure(f"{name} is not active")
-        self.bus.call(
-            f"behavior_{name.lower()}/stop",
-            COORDINATOR,
-            lambda: _stopped(behavior.finish(EventCode.INTERRUPTED, "inhibited")),
-        )
+        if self.bus.quiet():
+            behavior.finish(EventCode.INTERRUPTED, "inhibited")
+        else:
+            self.bus.call(
+                f"behavior_{name.lower()}/stop",
+                COORDINATOR,
+                lambda: _stopped(behavior.finish(EventCode.INTERRUPTED, "inhibited")),
+            )
         self._publish()
         return ServiceResult(True)
 

@@ -18,7 +18,11 @@ class EventCode(str, Enum):
     PROCESS_FAILURE = "PROCESS_FAILURE"
 
 
-@dataclass(frozen=True, slots=True)
+# Frozen dataclasses set their fields through `object.__setattr__`, which makes them
+# three times dearer to build than plain ones; an activation builds several results and
+# one event, so those two classes set their fields through the slot descriptors instead
+# (same signature, still frozen, equal, hashable and printable as generated).
+@dataclass(frozen=True, slots=True, init=False)
 class ServiceResult:
     """Every service answers `(ok, error, payload)`: errors are data, not exceptions."""
 
@@ -26,8 +30,18 @@ class ServiceResult:
     error: str = ""
     payload: dict[str, Any] = field(default_factory=dict)
 
+    def __init__(self, ok: bool, error: str = "", payload: dict[str, Any] | None = None) -> None:
+        _SR_OK(self, ok)
+        _SR_ERROR(self, error)
+        _SR_PAYLOAD(self, {} if payload is None else payload)
+
     def as_dict(self) -> dict[str, Any]:
         return {"ok": self.ok, "error": self.error, **self.payload}
+
+
+_SR_OK, _SR_ERROR, _SR_PAYLOAD = (
+    ServiceResult.__dict__[n].__set__ for n in ("ok", "error", "payload")
+)
 
 
 OK = ServiceResult(True)
@@ -37,7 +51,7 @@ def failure(error: str, **payload: Any) -> ServiceResult:
     return ServiceResult(False, error, payload)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True, slots=True, init=False)
 class BehaviorEvent:
     """A behavior's one end event: which activation (`uid`) ended, how, and when."""
 
@@ -47,6 +61,15 @@ class BehaviorEvent:
     time_ns: int
     detail: str = ""
 
+    def __init__(
+        self, name: str, uid: int, code: EventCode, time_ns: int, detail: str = ""
+    ) -> None:
+        _EV_NAME(self, name)
+        _EV_UID(self, uid)
+        _EV_CODE(self, code)
+        _EV_TIME(self, time_ns)
+        _EV_DETAIL(self, detail)
+
     def as_dict(self) -> dict[str, Any]:
         return {
             "name": self.name,
@@ -54,6 +77,11 @@ class BehaviorEvent:
             "code": self.code.value,
             "detail": self.detail,
         }
+
+
+_EV_NAME, _EV_UID, _EV_CODE, _EV_TIME, _EV_DETAIL = (
+    BehaviorEvent.__dict__[n].__set__ for n in ("name", "uid", "code", "time_ns", "detail")
+)
 
 
 @dataclass(frozen=True, slots=True)

@@ -16,8 +16,8 @@ Two departures from the thesis, both deliberate:
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
+from collections.abc import Iterable
+from types import TracebackType
 
 from aeroexec.catalog.model import Catalog
 from aeroexec.executive.bus import Bus
@@ -42,6 +42,7 @@ class ResourceManager:
         self._batch_depth = 0
         self._published: list[tuple[str, int]] | None = None
         self._capability_order = {name: i for i, name in enumerate(catalog.capabilities)}
+        self._batch = _Batch(self)
 
     # -- queries -------------------------------------------------------------------------
     @property
@@ -69,7 +70,7 @@ class ResourceManager:
                     remaining[capability] -= 1
                     if remaining[capability] == 0:
                         del remaining[capability]
-        new = tuple(c for c in expansion if c not in remaining)
+        new = tuple([c for c in expansion if c not in remaining])
         if not new:
             return OK
         problem = self.specialist.capability_conflict(new, frozenset(remaining))
@@ -93,6 +94,8 @@ class ResourceManager:
         )
 
     def activate_resources(self, behavior: str) -> ServiceResult:
+        if self.bus.quiet():
+            return self._activate(behavior)
         return self.bus.call(
             "activate_resources",
             f"behavior_{behavior.lower()}",
@@ -101,6 +104,8 @@ class ResourceManager:
         )
 
     def cancel_resources(self, behavior: str) -> ServiceResult:
+        if self.bus.quiet():
+            return self._cancel(behavior)
         return self.bus.call(
             "cancel_resources",
             f"behavior_{behavior.lower()}",
@@ -108,17 +113,15 @@ class ResourceManager:
             lambda: {"behavior": behavior},
         )
 
-    @contextmanager
-    def batch(self) -> Iterator[None]:
-        """Defer stopping unneeded processes to the end of the block."""
-        self._batch_depth += 1
-        try:
-            yield
-        finally:
-            self._batch_depth -= 1
-            if self._batch_depth == 0:
-                self._sweep()
-                self._publish()
+    def batch(self) -> _Batch:
+        """Defer stopping unneeded processes to the end of the block (`with batch():`)."""
+        return self._batch
+
+    def _end_batch(self) -> None:
+        self._batch_depth -= 1
+        if self._batch_depth == 0:
+            self._sweep()
+            self._publish()
 
     # -- work ----------------------------------------------------------------------------
     def _initiate(self, defaults: tuple[str, ...]) -> ServiceResult:
@@ -135,7 +138,7 @@ class ResourceManager:
         if not answer.ok:
             return answer
         capabilities: list[str] = answer.payload["capabilities"]
-        new = tuple(c for c in capabilities if c not in self.references)
+        new = tuple([c for c in capabilities if c not in self.references])
         if new:
             consistent = self.specialist.check_capabilities_consistency(
                 RESOURCE_MANAGER, new, tuple(self.references)
@@ -208,12 +211,14 @@ class ResourceManager:
             process.set_up()
         process.start()
         self._start_order.append(name)
-        self.bus.publish("process_state", lambda: {"process": name, "state": "started"})
+        if self.bus.observed:
+            self.bus.publish("process_state", {"process": name, "state": "started"})
 
     def _stop_process(self, name: str) -> None:
         self.processes[name].stop()
         self._start_order.remove(name)
-        self.bus.publish("process_state", lambda: {"process": name, "state": "stopped"})
+        if self.bus.observed:
+            self.bus.publish("process_state", {"process": name, "state": "stopped"})
 
     def _publish(self) -> None:
         if not self.bus.observed:
@@ -227,3 +232,25 @@ class ResourceManager:
             "list_of_active_capabilities",
             {"capabilities": [{"name": n, "references": c} for n, c in current]},
         )
+
+
+class _Batch:
+    """`ResourceManager.batch()`: a plain context manager (a generator-based one costs
+    more than the rest of an unobserved activation's bookkeeping); the nesting depth
+    lives in the manager, so one instance serves every (nested) use."""
+
+    __slots__ = ("_manager",)
+
+    def __init__(self, manager: ResourceManager) -> None:
+        self._manager = manager
+
+    def __enter__(self) -> None:
+        self._manager._batch_depth += 1
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self._manager._end_batch()

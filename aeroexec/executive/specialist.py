@@ -28,6 +28,8 @@ class BehaviorSpecialist:
     def check_behavior_format(
         self, caller: str, name: str, arguments: Mapping[str, Any]
     ) -> ServiceResult:
+        if self.bus.quiet():
+            return self._check_format(name, arguments)
         return self.bus.call(
             "check_behavior_format",
             caller,
@@ -39,6 +41,8 @@ class BehaviorSpecialist:
         """Which active behaviors must stop for `name` to run (its incompatible lists;
         itself too when it is already active: a new activation restarts it)."""
         active = tuple(active)
+        if self.bus.quiet():
+            return self._consistency(name, active)
         return self.bus.call(
             "check_consistency",
             caller,
@@ -47,11 +51,15 @@ class BehaviorSpecialist:
         )
 
     def default_values(self, caller: str, name: str) -> ServiceResult:
+        if self.bus.quiet():
+            return self._defaults(name)
         return self.bus.call(
             "default_values", caller, lambda: self._defaults(name), lambda: {"behavior": name}
         )
 
     def behavior_resources(self, caller: str, name: str) -> ServiceResult:
+        if self.bus.quiet():
+            return self._resources_of(name)
         return self.bus.call(
             "behavior_resources",
             caller,
@@ -62,6 +70,8 @@ class BehaviorSpecialist:
     def check_capabilities_consistency(
         self, caller: str, to_activate: tuple[str, ...], active: tuple[str, ...]
     ) -> ServiceResult:
+        if self.bus.quiet():
+            return self._capabilities_consistency(to_activate, active)
         return self.bus.call(
             "check_capabilities_consistency",
             caller,
