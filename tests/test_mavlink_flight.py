@@ -506,6 +506,7 @@ def test_fly_and_mavsim_defaults_are_loopback() -> None:
         ),
         (["--speed-factor", "0"], "speed factor must be positive"),
         (["--connect", "udpout:10.0.0.1:14550"], "not a loopback address"),
+        (["--stats", "/nonexistent/dir/s.json"], "cannot write --stats /nonexistent/dir/s.json"),
     ],
 )
 def test_bad_mavsim_options_exit_2_with_one_line(args: list[str], message: str) -> None:

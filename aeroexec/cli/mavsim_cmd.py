@@ -86,6 +86,8 @@ def mavsim_command(
         )
     except ValueError as exc:
         raise MavlinkError(str(exc)) from None
+    if stats is not None and str(stats) != "-" and not stats.resolve().parent.is_dir():
+        raise MavlinkError(f"cannot write --stats {stats}: no such directory")
     sim = MavSim(config)
     stop = False
 
@@ -106,6 +108,9 @@ def mavsim_command(
     finally:
         sim.close()
         if stats is not None:
-            sim.write_stats(stats)
+            try:
+                sim.write_stats(stats)
+            except OSError as exc:
+                raise MavlinkError(f"cannot write --stats {stats}: {exc.strerror or exc}") from None
     counts = sim.link.stats
     typer.echo(f"mavsim: stopped after {sim.elapsed:.1f} s; {counts.summary()}")

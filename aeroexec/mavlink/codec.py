@@ -14,7 +14,7 @@ import base64
 import hashlib
 import math
 import string
-import time
+import types
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -22,10 +22,6 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 MAVLinkMessage = mavlink.MAVLink_message
-
-#: Signing timestamps count 10 µs units from 2015-01-01 (MAVLink 2 signing spec; this is
-#: what pymavlink's `mavutil.setup_signing` uses too).
-SIGNING_EPOCH = 1420070400
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,13 +50,14 @@ def new_codec(system: int, component: int, key: bytes | None = None) -> Any:
     mav = mavlink.MAVLink(None, srcSystem=system, srcComponent=component)
     mav.robust_parsing = True
     if key is not None:
-        # The same settings `mavutil.mavfile.setup_signing` makes.
-        mav.signing.secret_key = key
-        mav.signing.sign_outgoing = True
-        mav.signing.allow_unsigned_callback = None
-        mav.signing.link_id = 0
-        now = max(time.time(), SIGNING_EPOCH)
-        mav.signing.timestamp = int((now - SIGNING_EPOCH) * 100 * 1000)
+        # pymavlink's own setup (timestamp from its 2015 epoch, link id 0); it only
+        # touches `.mav`, so it runs on a holder of our codec.
+        from pymavlink import mavutil
+
+        holder = types.SimpleNamespace(mav=mav)
+        mavutil.mavfile.setup_signing(
+            holder, key, sign_outgoing=True, allow_unsigned_callback=None, link_id=0
+        )
     return mav
 
 
