@@ -186,6 +186,12 @@ class _Outcomes:
             "uid": uid if isinstance(uid, int) else None,
             "error": str(response.get("error", "")),
         }
+        early = self._by_uid.get(run["uid"]) if run["uid"] is not None else None
+        if early is not None and early["requested_ns"] is None:
+            # A behavior that fails in on_start ends inside its own activation call, so
+            # its event is written before the (completed) call: join the two.
+            early.update(run)
+            return
         self._runs.append(run)
         if run["uid"] is not None:
             self._by_uid[run["uid"]] = run
@@ -201,6 +207,8 @@ class _Outcomes:
                 "uid": uid if isinstance(uid, int) else None,
             }
             self._runs.append(run)
+            if run["uid"] is not None:
+                self._by_uid[run["uid"]] = run
         run["outcome"] = str(data.get("code", "?"))
         run["ended_ns"] = log_time_ns
         run["detail"] = str(data.get("detail", ""))
