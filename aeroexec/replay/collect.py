@@ -55,6 +55,7 @@ class _Command:
         "arguments",
         "behavior",
         "capabilities",
+        "closed",
         "command",
         "end_code",
         "end_detail",
@@ -89,26 +90,67 @@ class _Command:
         self.end_code: str | None = None
         self.end_ns: int | None = None
         self.end_detail = ""
+        #: True once the next command has started: no more transitions for this one.
+        self.closed = False
 
-    def freeze(self) -> CommandOutcome:
+    @property
+    def final(self) -> bool:
+        """Nothing can change any more: its window is closed and it is not an
+        activation still waiting for its end event."""
+        return self.closed and (self.uid is None or self.end_ns is not None)
+
+
+class _Interner:
+    """Equal summary values share one object: a long mission repeats the same
+    arguments and the same transition sequences hundreds of times."""
+
+    def __init__(self) -> None:
+        self._transitions: dict[tuple[str, bool], Transition] = {}
+        self._sequences: dict[tuple[Transition, ...], tuple[Transition, ...]] = {}
+        self._arguments: dict[str, dict[str, Any]] = {}
+        self._texts: dict[str, str] = {}
+
+    def transition(self, name: str, up: bool) -> Transition:
+        key = (name, up)
+        found = self._transitions.get(key)
+        if found is None:
+            found = self._transitions[key] = Transition(name, up)
+        return found
+
+    def sequence(self, items: list[Transition]) -> tuple[Transition, ...]:
+        key = tuple(items)
+        return self._sequences.setdefault(key, key)
+
+    def text(self, value: str) -> str:
+        return self._texts.setdefault(value, value)
+
+    def arguments(self, value: dict[str, Any]) -> dict[str, Any]:
+        if not value:
+            return _NO_ARGUMENTS
+        return self._arguments.setdefault(repr(value), value)
+
+    def freeze(self, command: _Command) -> CommandOutcome:
         return CommandOutcome(
-            index=self.index,
-            time_ns=self.time_ns,
-            command=self.command,
-            behavior=self.behavior,
-            arguments=self.arguments,
-            text=self.text,
-            accepted=self.accepted,
-            error=self.error,
-            uid=self.uid,
-            preempted=self.preempted,
-            situation=self.situation,
-            capabilities=tuple(self.capabilities),
-            processes=tuple(self.processes),
-            end_code=self.end_code,
-            end_ns=self.end_ns,
-            end_detail=self.end_detail,
+            index=command.index,
+            time_ns=command.time_ns,
+            command=command.command,
+            behavior=command.behavior,
+            arguments=self.arguments(command.arguments),
+            text=command.text,
+            accepted=command.accepted,
+            error=self.text(command.error),
+            uid=command.uid,
+            preempted=command.preempted,
+            situation=command.situation,
+            capabilities=self.sequence(command.capabilities),
+            processes=self.sequence(command.processes),
+            end_code=command.end_code,
+            end_ns=command.end_ns,
+            end_detail=self.text(command.end_detail),
         )
+
+
+_NO_ARGUMENTS: dict[str, Any] = {}
 
 
 class OutcomeBuilder:
@@ -117,7 +159,8 @@ class OutcomeBuilder:
 
     def __init__(self, horizon_ns: int | None = None) -> None:
         self.horizon_ns = horizon_ns
-        self.commands: list[_Command] = []
+        #: Each command's summary: frozen as soon as it is final, so it exists once.
+        self.commands: list[_Command | CommandOutcome] = []
         self._current: _Command | None = None
         self._running: dict[int, _Command] = {}
         self._early: dict[int, tuple[str, int, str]] = {}
@@ -125,8 +168,7 @@ class OutcomeBuilder:
         self._initial_capabilities: list[Transition] = []
         self._initial_processes: list[Transition] = []
         self._state: tuple[Any, int] | None = None
-        #: Shared Transition values: a long run repeats the same few thousands of times.
-        self._transitions: dict[tuple[str, bool], Transition] = {}
+        self._intern = _Interner()
         self.start_ns: int | None = None
         self.end_ns: int | None = None
 
@@ -169,9 +211,13 @@ class OutcomeBuilder:
         if not self._keep(time_ns) or not isinstance(data, dict):
             return
         if name == COMMAND_TOPIC:
+            previous = self._current
             self._current = _Command(len(self.commands), time_ns, data)
             self.commands.append(self._current)
             self._early.clear()
+            if previous is not None:
+                previous.closed = True
+                self._settle(previous)
         elif name == "behavior_event":
             self._event(data, time_ns)
         elif name == "process_state":
@@ -201,7 +247,10 @@ class OutcomeBuilder:
             final = FinalState.from_message(self._state[0], self._state[1])
         return RunOutcome(
             source=source,
-            commands=tuple(c.freeze() for c in self.commands),
+            commands=tuple(
+                c if isinstance(c, CommandOutcome) else self._intern.freeze(c)
+                for c in self.commands
+            ),
             initial_capabilities=tuple(self._initial_capabilities),
             initial_processes=tuple(self._initial_processes),
             final_state=final,
@@ -228,11 +277,11 @@ class OutcomeBuilder:
         command.error = str(response.get("error", ""))
 
     def _transition(self, name: str, up: bool) -> Transition:
-        key = (name, up)
-        transition = self._transitions.get(key)
-        if transition is None:
-            transition = self._transitions[key] = Transition(name, up)
-        return transition
+        return self._intern.transition(name, up)
+
+    def _settle(self, command: _Command) -> None:
+        if command.final:
+            self.commands[command.index] = self._intern.freeze(command)
 
     def _window(self, initial: list[Transition], field: str) -> list[Transition]:
         current = self._current
@@ -250,6 +299,7 @@ class OutcomeBuilder:
             self._early[uid] = end
             return
         command.end_code, command.end_ns, command.end_detail = end
+        self._settle(command)
 
     def _capability_snapshot(self, data: dict[str, Any]) -> None:
         items = data.get("capabilities")

@@ -34,7 +34,7 @@ _PREFIX = struct.Struct("<BQ")
 _CHUNK_TIMES = struct.Struct("<QQ")
 _CHANNEL_ID = struct.Struct("<H")
 _MAGIC_LENGTH = 8
-_BUFFER = 1 << 20
+_BUFFER = 1 << 18
 
 
 def topic_name(topic: str) -> str:
