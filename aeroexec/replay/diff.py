@@ -1,7 +1,8 @@
 """Compare two `RunOutcome`s command by command and say what changed, and why.
 
 The runs are aligned by mission command: each command is identified by its kind and
-behavior (or belief text), and the two sequences are matched with `difflib` so that
+behavior (or belief text), and the two sequences are matched (common prefix first,
+then `difflib`) so that
 commands present in only one run (the mission took another path) are reported as such
 instead of shifting every comparison after them. Arguments are compared for the matched
 pairs (a mission may compute them from beliefs).
@@ -130,8 +131,7 @@ def diff_outcomes(
     matched = 0
     a = [c.key for c in base.commands]
     b = [c.key for c in new.commands]
-    matcher = difflib.SequenceMatcher(None, a, b, autojunk=False)
-    for tag, i1, i2, j1, j2 in matcher.get_opcodes():
+    for tag, i1, i2, j1, j2 in align(a, b):
         if tag == "equal":
             for old, cur in zip(base.commands[i1:i2], new.commands[j1:j2], strict=True):
                 matched += 1
@@ -149,6 +149,24 @@ def diff_outcomes(
     for run in (base, new):
         all_notes.extend(f"{run.source}: {note}" for note in run.notes)
     return DiffResult(names[0], names[1], tuple(out), matched, tol, tuple(all_notes))
+
+
+def align(
+    a: list[tuple[str, str]], b: list[tuple[str, str]]
+) -> list[tuple[str, int, int, int, int]]:
+    """difflib opcodes, anchored on the common prefix: two runs of one mission agree
+    until they diverge, so their first commands are matched first (a longest-block
+    match could pair a run's start with the other's middle)."""
+    prefix = 0
+    while prefix < min(len(a), len(b)) and a[prefix] == b[prefix]:
+        prefix += 1
+    opcodes: list[tuple[str, int, int, int, int]] = []
+    if prefix:
+        opcodes.append(("equal", 0, prefix, 0, prefix))
+    matcher = difflib.SequenceMatcher(None, a[prefix:], b[prefix:], autojunk=False)
+    for tag, i1, i2, j1, j2 in matcher.get_opcodes():
+        opcodes.append((tag, i1 + prefix, i2 + prefix, j1 + prefix, j2 + prefix))
+    return opcodes
 
 
 # -- one command ----------------------------------------------------------------------------
