@@ -574,6 +574,34 @@ def test_garbage_from_a_stranger_is_counted_and_ignored(vehicle_port: int) -> No
     assert vehicle.telemetry.mode == "GUIDED" and vehicle.state().armed == state.armed
 
 
+def test_garbage_from_the_autopilots_own_address_is_parsed_counted_and_survived(
+    vehicle_port: int,
+) -> None:
+    vehicle = _vehicle(vehicle_port)
+    rng = random.Random(11)
+    blobs = [bytes(rng.randrange(256) for _ in range(rng.randrange(1, 200))) for _ in range(200)]
+    blobs += [b"\xfd\xff" + bytes(20), b"\xfe\x09", _packet(_heartbeat())[:-3]]  # cut short
+    with FakeAutopilot(vehicle_port, answer=lambda msg: mavlink.MAV_RESULT_ACCEPTED) as autopilot:
+        vehicle.connect()
+        for blob in blobs:
+            autopilot.link.sock.sendto(blob, ("127.0.0.1", vehicle_port))
+        time.sleep(0.1)
+        vehicle.step(0.1)
+        vehicle.set_yaw(0.5)  # still commanded and acknowledged after the garbage
+    vehicle.close()
+    rejected = vehicle.stats.rejected
+    assert rejected["foreign_address"] == 0  # it came from the locked peer: parsed
+    assert rejected["truncated"] >= 3 and sum(rejected.values()) >= len(blobs)
+    assert rejected["unknown_message"] > 0  # what random bytes mostly "decode" to
+    assert set(vehicle.stats.received) <= {
+        "HEARTBEAT",
+        "LOCAL_POSITION_NED",
+        "EXTENDED_SYS_STATE",
+        "COMMAND_ACK",
+    }
+    assert vehicle.state().position == (2.0, 1.0, 3.0) and vehicle.telemetry.mode == "GUIDED"
+
+
 def test_struct_layout_of_tlog_records_is_what_read_tlog_assumes() -> None:
     data = TLOG.read_bytes()
     (first_us,) = struct.unpack_from(">Q", data, 0)

@@ -28,7 +28,9 @@ MAVLinkMessage = mavlink.MAVLink_message
 class Rejected:
     """Bytes that were not a usable MAVLink packet, and why."""
 
-    reason: str  # "bad_crc", "bad_signature", "bad_prefix", "truncated", "malformed"
+    #: "bad_crc", "bad_signature", "bad_prefix", "truncated", "malformed", "unknown_message"
+    #: (and, from the link, "foreign_address")
+    reason: str
     raw: bytes
     detail: str = ""
 
@@ -90,6 +92,12 @@ class Decoder:
             if msg.get_type() == "BAD_DATA":
                 detail = str(getattr(msg, "reason", ""))
                 rejected.append(Rejected(_classify(detail), bytes(msg.get_msgbuf()), detail))
+            elif isinstance(msg, mavlink.MAVLink_unknown):
+                # pymavlink returns ids outside the dialect before checking the CRC (it
+                # has no CRC_EXTRA for them): unverifiable, so never trusted. Random
+                # bytes decode this way more often than anything else.
+                detail = f"{msg.get_type()}: message id not in the dialect"
+                rejected.append(Rejected("unknown_message", bytes(msg.get_msgbuf()), detail))
             else:
                 messages.append(msg)
         leftover = self.mav.buf_len()
