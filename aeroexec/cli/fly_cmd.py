@@ -70,7 +70,8 @@ def fly_command(
     The live counterpart of `aeroexec run`: same core, same behaviors, same printout,
     on the wall clock. Try it against the simulator:
 
-        aeroexec mavsim &
+    \b
+        aeroexec mavsim --speed-factor 3 &
         aeroexec fly missions/appendix_c.py --record flight.mcap
 
     Exit code 0 when the mission function returned, 1 when it raised, 2 when an input

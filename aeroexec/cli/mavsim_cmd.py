@@ -62,6 +62,7 @@ def mavsim_command(
 
     Fly a mission against it from another terminal:
 
+    \b
         aeroexec mavsim --speed-factor 3
         aeroexec fly missions/appendix_c.py
 
