@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 from test_replay_support import (
     APPENDIX_C,
+    DEFAULT_CATALOG_FILE,
     REPO,
     SURVEY,
     WATCH,
@@ -260,7 +261,9 @@ def test_empty_directory_and_unmatched_glob(work: Path) -> None:
     empty.mkdir()
     code, _, err = cli("replay", str(empty))
     assert code == 2
-    assert one_error_line(err) == f"{empty}: error: no *.mcap recordings in this directory"
+    assert one_error_line(err) == (
+        f"{empty}: error: no *.mcap (or *.bag) recordings in this directory"
+    )
     code, _, err = cli("replay", str(work / "zz*.mcap"))
     assert code == 2
     assert one_error_line(err).endswith("error: no recordings match this pattern")
@@ -300,3 +303,26 @@ def test_output_needs_one_recording_and_never_overwrites_its_input(
     assert code == 2
     assert "would overwrite a recording being replayed" in one_error_line(err)
     assert target.read_bytes() == before
+
+
+def test_a_directory_with_a_ros1_bag(flights: Path, work: Path) -> None:
+    """Bags in a directory are replayed too (open loop, through aeroexec.bags' import),
+    and their replays are written as .mcap files."""
+    from test_bags_support import short_mission
+
+    mixed = work / "mixed"
+    mixed.mkdir()
+    short_mission().write(mixed / "b_flight.bag")
+    shutil.copy(flights / "watch.mcap", mixed / "a_watch.mcap")
+    out_dir = work / "mixed-replays"
+    code, out, err = cli(
+        "replay", str(mixed), "--catalog", str(DEFAULT_CATALOG_FILE), "--check", "--format", "json",
+        "--out-dir", str(out_dir),
+    )  # fmt: skip
+    assert code == 0, err
+    recordings = json.loads(out)["recordings"]
+    assert [(r["recording"], r["mode"], r["equal"]) for r in recordings] == [
+        (str(mixed / "a_watch.mcap"), "closed", True),
+        (str(mixed / "b_flight.bag"), "open", True),
+    ]
+    assert sorted(p.name for p in out_dir.iterdir()) == ["a_watch.mcap", "b_flight.mcap"]

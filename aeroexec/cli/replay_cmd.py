@@ -40,7 +40,7 @@ def _check_outputs(paths: list[str], output: str | None, out_dir: str | None) ->
     if out_dir is not None:
         targets = [output_for(p, out_dir) for p in paths]
     if len(set(targets)) != len(targets):
-        raise AeroexecError("--out-dir: two recordings have the same file name")
+        raise AeroexecError("--out-dir: two recordings would be written to the same file")
     sources = {Path(p).resolve() for p in paths if Path(p).exists()}
     for target in targets:
         if Path(target).resolve() in sources:
@@ -69,7 +69,8 @@ def replay(
         list[str],
         typer.Argument(
             metavar="REC...",
-            help="Recordings (.mcap), directories (every *.mcap inside) or quoted globs.",
+            help="Recordings (.mcap, ROS 1 .bag), directories (every *.mcap and *.bag "
+            "inside) or quoted globs.",
             show_default=False,
         ),
     ],
@@ -93,7 +94,7 @@ def replay(
     ] = None,
     out_dir: Annotated[
         str | None,
-        typer.Option("--out-dir", metavar="DIR", help="Record each replay to DIR/<REC name>."),
+        typer.Option("--out-dir", metavar="DIR", help="Record each replay to DIR/<REC stem>.mcap."),
     ] = None,
     check: Annotated[
         bool,

@@ -162,7 +162,8 @@ def _mode_name(options: ReplayOptions) -> str | None:
 
 
 def output_for(recording: str, out_dir: str) -> str:
-    return str(Path(out_dir) / Path(recording).name)
+    """Where `--out-dir` writes the replay of `recording` (a bag's replay is an MCAP)."""
+    return str(Path(out_dir) / (Path(recording).stem + ".mcap"))
 
 
 def replay_many(
@@ -175,7 +176,7 @@ def replay_many(
 ) -> list[ReplayResult]:
     """Replay every recording, `jobs` at a time in separate processes; the results come
     back in the order of `paths` whatever finishes first. `out_dir`: write each replay
-    to `out_dir/<recording name>`. `on_done` is told each result as it finishes."""
+    to `out_dir/<recording stem>.mcap`. `on_done` is told each result as it finishes."""
     per_path = [
         replace(options, output=output_for(p, out_dir)) if out_dir is not None else options
         for p in paths

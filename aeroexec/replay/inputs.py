@@ -1,5 +1,5 @@
-"""Which recordings a command line names: files, directories (every `*.mcap` inside,
-sorted) and glob patterns (sorted matches), in the order given."""
+"""Which recordings a command line names: files, directories (every `*.mcap` and ROS 1
+`*.bag` inside, sorted) and glob patterns (sorted matches), in the order given."""
 
 from __future__ import annotations
 
@@ -8,6 +8,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 _GLOB_CHARS = frozenset("*?[")
+#: What a directory contributes.
+SUFFIXES = (".mcap", ".bag")
 
 
 @dataclass(frozen=True, slots=True)
@@ -23,9 +25,11 @@ def expand_inputs(arguments: list[str]) -> list[Input]:
     for argument in arguments:
         path = Path(argument)
         if path.is_dir():
-            found = sorted(str(p) for p in path.glob("*.mcap") if p.is_file())
+            found = sorted(
+                str(p) for p in path.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file()
+            )
             if not found:
-                out.append(Input(argument, "no *.mcap recordings in this directory"))
+                out.append(Input(argument, "no *.mcap (or *.bag) recordings in this directory"))
             out.extend(Input(p) for p in found)
         elif not path.exists() and _GLOB_CHARS & set(argument):
             matches = sorted(m for m in glob.glob(argument, recursive=True) if Path(m).is_file())
