@@ -337,7 +337,7 @@ class _Import:
                 f"{stats.bad_arguments} behavior argument text(s) were not a YAML mapping "
                 "(replaced by no arguments)"
             )
-        selected = self.selected
+        selected = {kind for kind, _ in self.handlers.values()}  # mapped and decodable
         if Kind.ACTIVE_BEHAVIORS in selected and Kind.BEHAVIOR_EVENT not in selected:
             notes.append(
                 "the bag has active-behavior lists but no behavior events: every behavior "

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from aeroexec.bags.importer import ImportReport, import_bag
 from aeroexec.bags.mapping import Mapping
-from aeroexec.errors import AeroexecError
+from aeroexec.errors import AeroexecError, Mark, RecordingError
 
 if TYPE_CHECKING:
     from aeroexec.replay.engine import ReplayOptions, ReplayResult
@@ -61,6 +61,13 @@ def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayRe
     from aeroexec.replay.engine import replay_recording
 
     with bag_recording(path) as imported:
+        if not imported.report.derived.get("mission/command"):
+            raise RecordingError(
+                "no behavior commands to replay: the bag has none of the behavior topics "
+                "the Aerostack mapping knows (behavior_event, list_of_active_behaviors, "
+                "command topics); `aeroexec import --mapping` then replay the .mcap",
+                Mark(str(path)),
+            )
         try:
             result = replay_recording(imported.path, options)
         except AeroexecError as exc:
