@@ -146,9 +146,10 @@ class AerostackBag:
     def write(self, path: Path, compression: str | None = None) -> Path:
         store = typestore()
         real = real_definitions()
-        with Writer(path) as writer:
-            if compression is not None:
-                writer.set_compression(Writer.CompressionFormat[compression.upper()])
+        writer = Writer(path)
+        if compression is not None:
+            writer.set_compression(Writer.CompressionFormat[compression.upper()])
+        with writer:
             connections: dict[tuple[str, str], Any] = {}
             for time_ns, topic, msgtype, fields in sorted(self.items, key=lambda i: i[0]):
                 key = (topic, msgtype)
@@ -216,13 +217,15 @@ CAPABILITY_PROCESSES = {
 }
 
 
-def short_mission(version: str = "2018", resources: bool = True) -> AerostackBag:
+def short_mission(
+    version: str = "2018", resources: bool = True, drone: str = "drone1"
+) -> AerostackBag:
     """Take off, pay attention, go to (1, 2, 1), hover, inhibit PAY_ATTENTION, land
     (LAND preempts KEEP_HOVERING), as an Aerostack drone flying the thesis' Appendix A
     catalog would record it. With `resources`, also the resource manager's capability
     lists and the processes' heartbeats that catalog implies (processes start in
     capability order and stop in reverse)."""
-    bag = AerostackBag(version=version)
+    bag = AerostackBag(drone=drone, version=version)
     if resources:
         _resources(bag)
     bag.battery(0.0, 90.0)

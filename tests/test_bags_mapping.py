@@ -1,0 +1,98 @@
+"""The topic mapping: the shipped Aerostack default, fallbacks in order, type rules,
+{drone}, and a --mapping file that overrides the default."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from test_bags_support import AEROSTACK_BAG, TURTLE_LZ4, short_mission
+from typer.testing import CliRunner
+
+from aeroexec.bags import Kind, import_bag, load_mapping
+from aeroexec.cli import app
+from aeroexec.recording import open_recording
+
+
+def test_the_default_mapping_has_aerostacks_names() -> None:
+    mapping = load_mapping()
+    assert mapping.drone == "drone1"
+    assert mapping.grace_ns == 500_000_000
+    by_kind: dict[Kind, list[str]] = {}
+    for rule in mapping.rules:
+        by_kind.setdefault(rule.kind, []).append(rule.topic or f"type {rule.type}")
+    assert by_kind[Kind.BEHAVIOR_EVENT] == ["/{drone}/behavior_event"]
+    assert by_kind[Kind.ACTIVE_BEHAVIORS] == ["/{drone}/list_of_active_behaviors"]
+    assert by_kind[Kind.ACTIVE_CAPABILITIES] == ["/{drone}/list_of_active_capabilities"]
+    assert by_kind[Kind.POSE][0] == "/{drone}/EstimatedPose_droneGMR_wrt_GFF"
+    assert by_kind[Kind.POSE][-1] == "type geometry_msgs/PoseStamped"
+    assert Kind.ACTIVATE_COMMAND not in by_kind  # 2017 commands were service calls
+
+
+def test_the_first_listed_pose_wins_and_a_mapping_file_can_prefer_another(
+    tmp_path: Path,
+) -> None:
+    """The real bag has both EstimatedPose_droneGMR_wrt_GFF (432) and SOEstimatedPose
+    (443): the default takes the first; a mapping listing SOEstimatedPose takes that."""
+    default = import_bag(AEROSTACK_BAG, tmp_path / "a.mcap")
+    assert default.mapped["pose"] == "/drone1/EstimatedPose_droneGMR_wrt_GFF"
+    assert default.derived["vehicle/state"] == 432
+    custom = tmp_path / "so.yaml"
+    custom.write_text('topics:\n  - {topic: "/{drone}/SOEstimatedPose", kind: pose}\n')
+    other = import_bag(AEROSTACK_BAG, tmp_path / "b.mcap", mapping=custom)
+    assert other.mapped == {"pose": "/drone1/SOEstimatedPose"}
+    assert other.derived["vehicle/state"] == 443
+    assert "process_state" not in other.derived  # the custom file replaces the default
+
+
+def test_a_type_rule_takes_the_first_topic_of_that_type(tmp_path: Path) -> None:
+    custom = tmp_path / "turtle.yaml"
+    custom.write_text("drone: turtle\ntopics:\n  - {type: turtlesim/Pose, kind: pose}\n")
+    report = import_bag(TURTLE_LZ4, tmp_path / "t.mcap", mapping=custom)
+    assert report.mapped == {"pose": "/turtle1/pose"}
+    states = [
+        r.data
+        for r in open_recording(tmp_path / "t.mcap").records()
+        if r.topic == "/turtle/vehicle/state"
+    ]
+    assert len(states) == 1344
+    first = states[0]
+    assert first["position"][2] == 0.0  # turtlesim has x, y, theta
+    assert -math.pi <= first["yaw"] <= math.pi
+    assert first["defaulted"] == ["velocity", "battery", "flying"]
+    assert first["flying"] is False
+
+
+def test_drone_namespace_selects_topics_and_names_channels(tmp_path: Path) -> None:
+    path = short_mission(drone="drone2").write(tmp_path / "d2.bag")
+    report = import_bag(path, tmp_path / "default.mcap")
+    assert "behavior_event" not in report.mapped  # /drone1/... names only
+    report = import_bag(path, tmp_path / "d2.mcap", drone="drone2")
+    assert report.mapped["behavior_event"] == "/drone2/behavior_event"
+    topics = set(open_recording(tmp_path / "d2.mcap").survey().topic_counts())
+    assert "/drone2/mission/command" in topics
+    assert "/ros1/drone2/behavior_event" in topics
+    assert not any(t.startswith("/drone1/") for t in topics)
+
+
+@pytest.mark.parametrize("flag", ["--mapping", "-m"])
+def test_cli_mapping_and_drone_options(tmp_path: Path, flag: str) -> None:
+    custom = tmp_path / "turtle.yaml"
+    custom.write_text('topics:\n  - {topic: "/turtle2/pose", kind: pose}\n')
+    result = CliRunner().invoke(
+        app,
+        [
+            "import",
+            str(TURTLE_LZ4),
+            "-o",
+            str(tmp_path / "t.mcap"),
+            flag,
+            str(custom),
+            "--drone",
+            "t2",
+        ],
+    )
+    assert result.exit_code == 0, result.stderr
+    assert "pose                 <- /turtle2/pose" in result.stdout
+    assert "derived /t2/: vehicle/state 1344, vehicle/pose 1344" in result.stdout
