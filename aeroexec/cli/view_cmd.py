@@ -4,23 +4,29 @@ from __future__ import annotations
 
 from contextlib import AbstractContextManager
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from aeroexec.cli.app import app, error_line, guarded
-from aeroexec.viz.progress import Advance, progress_bar
-from aeroexec.viz.view import RRD_SUFFIX, ViewReport, default_output, write_view
-from aeroexec.viz.viewer import cannot_spawn, open_viewer
+
+# rerun takes ~0.5 s to import: only `view` itself may pay for it, not every command.
+if TYPE_CHECKING:
+    from aeroexec.viz.progress import Advance
+    from aeroexec.viz.view import ViewReport
 
 
 def _default_output(base: Path, new: Path | None) -> Path:
+    from aeroexec.viz.view import RRD_SUFFIX, default_output
+
     if new is None:
         return default_output(base)
     return base.with_name(f"{base.stem}_vs_{new.stem}{RRD_SUFFIX}")
 
 
 def _progress(description: str, total: int) -> AbstractContextManager[Advance]:
+    from aeroexec.viz.progress import progress_bar
+
     return progress_bar(f"converting {description}", total)
 
 
@@ -103,6 +109,9 @@ def view(
     """
     output = save if save is not None else _default_output(recording, other)
     inputs = [recording] if other is None else [recording, other]
+
+    from aeroexec.viz.view import write_view
+    from aeroexec.viz.viewer import cannot_spawn, open_viewer
 
     report = write_view(inputs, output, progress=_progress)
     _summary(report)
