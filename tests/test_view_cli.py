@@ -12,7 +12,7 @@ import pytest
 from rerun.chunk import RrdReader
 from typer.testing import CliRunner
 
-from aeroexec.cli import app, view_cmd
+from aeroexec.cli import app
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
@@ -50,8 +50,8 @@ def launches(monkeypatch: pytest.MonkeyPatch) -> list[tuple[Path, bool]]:
         calls.append((rrd, web))
         return 0
 
-    monkeypatch.setattr(view_cmd, "open_viewer", fake_open)
-    monkeypatch.setattr(view_cmd, "cannot_spawn", lambda web=False: None)
+    monkeypatch.setattr("aeroexec.viz.viewer.open_viewer", fake_open)
+    monkeypatch.setattr("aeroexec.viz.viewer.cannot_spawn", lambda web=False: None)
     return calls
 
 

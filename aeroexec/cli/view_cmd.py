@@ -110,8 +110,8 @@ def view(
     output = save if save is not None else _default_output(recording, other)
     inputs = [recording] if other is None else [recording, other]
 
+    from aeroexec.viz import viewer
     from aeroexec.viz.view import write_view
-    from aeroexec.viz.viewer import cannot_spawn, open_viewer
 
     report = write_view(inputs, output, progress=_progress)
     _summary(report)
@@ -119,7 +119,7 @@ def view(
     want_viewer = web or (spawn if spawn is not None else save is None)
     if not want_viewer:
         return
-    reason = cannot_spawn(web=web)
+    reason = viewer.cannot_spawn(web=web)
     if reason is not None:
         error_line(
             f"aeroexec: viewer not started: {reason}. Open the file with `rerun {report.output}`"
@@ -129,4 +129,4 @@ def view(
         typer.echo("serving the web viewer (Ctrl-C to stop)")
     else:
         typer.echo("opening the Rerun viewer")
-    open_viewer(report.output, web=web)
+    viewer.open_viewer(report.output, web=web)
