@@ -84,6 +84,8 @@ class BehaviorSpecialist:
         descriptor = self.catalog.behaviors.get(name)
         if descriptor is None:
             return failure(f"unknown behavior {name}")
+        if not arguments and not descriptor.arguments:  # nothing to check, nothing to say
+            return ServiceResult(True, "", {"arguments": {}})
         check = check_arguments(descriptor, arguments)
         if not check.ok:
             return failure("; ".join(check.errors))
@@ -92,7 +94,8 @@ class BehaviorSpecialist:
     def _consistency(self, name: str, active: tuple[str, ...]) -> ServiceResult:
         victims = self.catalog.preempted_by(name)
         inconsistent = [b for b in active if b == name or b in victims]
-        inconsistent.sort(key=self.catalog.order_of)
+        if len(inconsistent) > 1:
+            inconsistent.sort(key=self.catalog.order_of)
         return ServiceResult(not inconsistent, "", {"inconsistent": inconsistent})
 
     def _defaults(self, name: str) -> ServiceResult:
