@@ -125,7 +125,8 @@ def dump(document: Any) -> str:
 def check_catalog(text: str) -> Catalog | None:
     """parse_catalog either returns a catalog that every consumer can use, or raises
     CatalogError with a one-line message and a mark inside the document."""
-    lines = text.count("\n") + 2
+    # YAML 1.1 also breaks lines at NEL, LS and PS, and marks count lines its way.
+    lines = sum(text.count(c) for c in ("\n", "\x85", "\u2028", "\u2029")) + 2
     try:
         catalog = parse_catalog(text, "fuzz.yaml")
     except CatalogError as err:
