@@ -14,6 +14,9 @@ from aeroexec.executive.messages import EventCode
 from aeroexec.vehicles.base import Vec3, VehicleCommandError
 
 #: No progress for this long (s) is WRONG_PROGRESS, for every goal-seeking behavior.
+#: Vehicle faults that end a motion behavior with PROCESS_FAILURE: the link to the
+#: autopilot is gone, or the pilot/autopilot took the vehicle out of the commanded mode.
+LINK_FAULTS = ("link_lost", "mode_changed")
 PROGRESS_WINDOW = 5.0
 #: A vehicle at or below this speed (m/s) counts as stopped.
 STOPPED_SPEED = 0.1
@@ -105,6 +108,7 @@ class MotionBehavior(Behavior):
     """
 
     _keep_command = False
+    fails_on_faults = LINK_FAULTS
 
     def achieved(self, detail: str = "") -> Finished:
         self._keep_command = True

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from aeroexec.behaviors._support import (
+    LINK_FAULTS,
     STOPPED_SPEED,
     MotionBehavior,
     ProgressWatch,
@@ -53,6 +54,7 @@ class Land(Behavior):
     landing, since hovering is not a safe default for a vehicle that was told to land."""
 
     name = "LAND"
+    fails_on_faults = LINK_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)

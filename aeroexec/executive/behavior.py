@@ -72,6 +72,11 @@ class Behavior:
 
     #: The catalog name this class implements (e.g. "GO_TO_POINT").
     name: ClassVar[str] = ""
+    #: Vehicle faults (prefixes of `VehicleState.fault`) that end this behavior at once
+    #: with PROCESS_FAILURE: a behavior that commands motion cannot go on over a lost
+    #: link. Faults the behavior should judge itself (a stuck motor shows as
+    #: WRONG_PROGRESS) are not listed.
+    fails_on_faults: ClassVar[tuple[str, ...]] = ()
 
     # -- the author's hooks ------------------------------------------------------------
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -177,6 +182,11 @@ class Behavior:
         """One run() of Algorithm 3.3: supervise, and end with one event when finished."""
         if not self.process.running:
             return
+        if self.fails_on_faults:
+            fault = self._host.vehicle.state().fault
+            if fault and fault.startswith(self.fails_on_faults):
+                self.finish(EventCode.PROCESS_FAILURE, f"vehicle fault: {fault}")
+                return
         try:
             outcome = self.on_run()
         except Exception as exc:

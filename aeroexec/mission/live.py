@@ -6,11 +6,10 @@ same executive core and behavior library run on the wall clock (`WallClock`) aga
 (`mavlink/tx`, `mavlink/rx`, plus `mavlink/rejected` and `mavlink/link`), so the
 recorder writes it beside the executive's own channels.
 
-Vehicle faults: the standard behaviors watch progress, not `VehicleState.fault`. Live,
-a lost link or a mode the pilot (or the autopilot's own failsafe) switched to must end
-the running motion behaviors at once, so `LiveExecutive` ends them with
-`PROCESS_FAILURE` ("vehicle fault: link_lost") after the step in which the fault
-appears.
+Vehicle faults: a lost link or a mode the pilot (or the autopilot's own failsafe)
+switched to ends the running motion behaviors at once with `PROCESS_FAILURE`
+("vehicle fault: link_lost"): the behavior base class does it for every behavior that
+lists those faults in `fails_on_faults` (all motion behaviors and LAND).
 """
 
 from __future__ import annotations
@@ -23,11 +22,9 @@ from aeroexec import __version__
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
-from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import WallClock
 from aeroexec.executive.executive import Executive
-from aeroexec.executive.messages import EventCode
 from aeroexec.mavlink.codec import signing_key
 from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
 from aeroexec.mavlink.vehicle import FAILSAFES, Failsafe, MavlinkConfig, MavlinkVehicle
@@ -36,9 +33,6 @@ from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionScript, load_mission, run_script
 from aeroexec.mission.session import SessionResult
 from aeroexec.vehicles.base import VehicleCommandError
-
-#: Faults (prefixes) that end running motion behaviors with PROCESS_FAILURE.
-MOTION_FAULTS = ("link_lost", "mode_changed")
 
 
 @dataclass(frozen=True)
@@ -80,28 +74,6 @@ class FlightConfig:
             )
         except ValueError as exc:
             raise MavlinkError(str(exc)) from None
-
-
-def _is_motion(behavior: Behavior) -> bool:
-    from aeroexec.behaviors import Land
-    from aeroexec.behaviors._support import MotionBehavior
-
-    return isinstance(behavior, (MotionBehavior, Land))
-
-
-class LiveExecutive(Executive):
-    """An `Executive` that turns a vehicle fault into PROCESS_FAILURE of the running
-    motion behaviors (see the module docstring). Everything else is the core's."""
-
-    def step(self) -> None:
-        super().step()
-        fault = self.vehicle.state().fault
-        if not fault.startswith(MOTION_FAULTS):
-            return
-        for name in self.active_behaviors:
-            behavior = self.coordinator.active.get(name)
-            if behavior is not None and behavior.running and _is_motion(behavior):
-                behavior.finish(EventCode.PROCESS_FAILURE, f"vehicle fault: {fault}")
 
 
 def fly(
@@ -158,7 +130,7 @@ def fly(
                 },
             )
             all_observers.append(recorder)
-        executive = LiveExecutive(
+        executive = Executive(
             catalog, vehicle=vehicle, clock=clock, observers=all_observers, drone=config.drone
         )
         vehicle.tap = executive.bus.publish  # hands over the traffic of the connection too
