@@ -262,7 +262,7 @@ def test_empty_directory_and_unmatched_glob(work: Path) -> None:
     code, _, err = cli("replay", str(empty))
     assert code == 2
     assert one_error_line(err) == (
-        f"{empty}: error: no *.mcap (or *.bag) recordings in this directory"
+        f"{empty}: error: no *.mcap recordings in this directory (nor ROS 1 *.bag)"
     )
     code, _, err = cli("replay", str(work / "zz*.mcap"))
     assert code == 2
@@ -326,3 +326,23 @@ def test_a_directory_with_a_ros1_bag(flights: Path, work: Path) -> None:
         (str(mixed / "b_flight.bag"), "open", True),
     ]
     assert sorted(p.name for p in out_dir.iterdir()) == ["a_watch.mcap", "b_flight.mcap"]
+
+
+def test_progress_bar_only_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    from aeroexec.cli.replay_cmd import _progress
+
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
+    assert _progress(3) is None
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    bar = _progress(3)
+    assert bar is not None and type(bar).__module__ == "rich.progress"
+    assert _progress(0) is None
+
+
+def test_diff_help_has_an_example() -> None:
+    code, out, _ = cli("diff", "--help")
+    assert code == 0
+    assert "aeroexec diff flight.mcap replayed.mcap" in out
+    assert "Exit codes" in out

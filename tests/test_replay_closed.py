@@ -8,6 +8,7 @@ kind) plus the wording a reviewer reads.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 from test_replay_support import (
@@ -23,7 +24,7 @@ from test_replay_support import (
     record_live_like,
 )
 
-from aeroexec.replay import Mode, ReplayOptions, extract_outcome, replay_recording
+from aeroexec.replay import Mode, ReplayOptions, ReplayResult, extract_outcome, replay_recording
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +41,7 @@ def recs(work: Path) -> dict[str, Path]:
     }
 
 
-def replay(path: Path, catalog: Path | None = None, **options: object):  # type: ignore[no-untyped-def]
+def replay(path: Path, catalog: Path | None = None, **options: Any) -> ReplayResult:
     return replay_recording(
         path, ReplayOptions(catalog=str(catalog) if catalog else None, **options)
     )

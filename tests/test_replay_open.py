@@ -9,6 +9,7 @@ timeouts must.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 from test_replay_support import (
@@ -23,7 +24,7 @@ from test_replay_support import (
 
 from aeroexec.executive.clock import SimClock
 from aeroexec.recording import open_recording
-from aeroexec.replay import Mode, ReplayOptions, extract_outcome, replay_recording
+from aeroexec.replay import Mode, ReplayOptions, ReplayResult, extract_outcome, replay_recording
 from aeroexec.replay.outcome import CommandOutcome
 from aeroexec.replay.source import SourceMessage
 from aeroexec.replay.standins import Script, stand_in_library
@@ -44,7 +45,7 @@ def recs(work: Path) -> dict[str, Path]:
     }
 
 
-def open_replay(path: Path, catalog: Path | None = None, **options: object):  # type: ignore[no-untyped-def]
+def open_replay(path: Path, catalog: Path | None = None, **options: Any) -> ReplayResult:
     return replay_recording(
         path,
         ReplayOptions(catalog=str(catalog) if catalog else None, mode=Mode.open, **options),
@@ -214,3 +215,9 @@ def test_stand_ins_end_as_recorded_and_inherit_situation_checks() -> None:
     executive.run_for(0.1)
     assert executive.events[-1].code.value == "WRONG_PROGRESS"
     assert executive.events[-1].time_ns == 700_000_000
+
+
+def test_replay_vehicle_is_a_vehicle() -> None:
+    from aeroexec.vehicles.base import Vehicle
+
+    assert isinstance(ReplayVehicle(iter(()), SimClock()), Vehicle)

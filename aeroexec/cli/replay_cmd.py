@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from enum import Enum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -16,6 +16,9 @@ from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for, replay_many
 from aeroexec.replay.inputs import expand_inputs
 from aeroexec.replay.report import replay_json, replay_junit, replay_text
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
 
 
 class OutputFormat(str, Enum):
@@ -52,7 +55,7 @@ def _check_outputs(paths: list[str], output: str | None, out_dir: str | None) ->
             raise RecordingError(f"cannot create: {exc.strerror or exc}", Mark(out_dir)) from None
 
 
-def _progress(total: int):  # type: ignore[no-untyped-def]
+def _progress(total: int) -> Progress | None:
     """A rich progress bar on stderr when it is a terminal, else None."""
     if total < 1 or not sys.stderr.isatty():
         return None

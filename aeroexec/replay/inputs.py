@@ -10,6 +10,7 @@ from pathlib import Path
 _GLOB_CHARS = frozenset("*?[")
 #: What a directory contributes.
 SUFFIXES = (".mcap", ".bag")
+EMPTY_DIRECTORY = "no *.mcap recordings in this directory (nor ROS 1 *.bag)"
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,7 +30,7 @@ def expand_inputs(arguments: list[str]) -> list[Input]:
                 str(p) for p in path.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file()
             )
             if not found:
-                out.append(Input(argument, "no *.mcap (or *.bag) recordings in this directory"))
+                out.append(Input(argument, EMPTY_DIRECTORY))
             out.extend(Input(p) for p in found)
         elif not path.exists() and _GLOB_CHARS & set(argument):
             matches = sorted(m for m in glob.glob(argument, recursive=True) if Path(m).is_file())
