@@ -58,3 +58,31 @@ def test_standard_motion_behaviors_and_land_fail_on_a_lost_link() -> None:
     failing = {n for n, cls in STANDARD_LIBRARY.items() if "link_lost" in cls.fails_on_faults}
     assert {"TAKE_OFF", "LAND", "GO_TO_POINT", "ROTATE", "FLIP", "START_MOVING"} <= failing
     assert "WAIT" not in failing and "BROADCAST_MESSAGE" not in failing
+
+
+def test_default_capabilities_hold_what_they_require() -> None:
+    """A default capability's required capabilities start at initiation, before it, and
+    stay referenced (the verifier's AX205 witness relies on the same rule)."""
+    from aeroexec.catalog import parse_catalog
+
+    catalog = parse_catalog(
+        """
+behavior_descriptors:
+  - behavior: HOVER
+    timeout: 5
+    recurrent: no
+capability_descriptors:
+  - capability: LOCALIZATION
+    active_by_default: yes
+    processes: [localizer]
+    required_capabilities: [ODOMETRY]
+  - capability: ODOMETRY
+    active_by_default: no
+    processes: [odometry]
+""",
+        "req.yaml",
+    )
+    ex = Executive(catalog, vehicle=NullVehicle(), library={})
+    assert ex.initiation.ok
+    assert ex.capability_references == {"ODOMETRY": 1, "LOCALIZATION": 1}
+    assert ex.running_processes == ("odometry", "localizer")

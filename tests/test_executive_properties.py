@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import string
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from hypothesis import HealthCheck, given, settings
@@ -186,7 +186,9 @@ def catalog_texts(draw: st.DrawFn) -> str:
 def _usable(catalog: Catalog) -> bool:
     if any(d.severity is Severity.ERROR for d in catalog.diagnostics):
         return False
-    defaults = [c for c, d in catalog.capabilities.items() if d.active_by_default]
+    defaults = _closure(catalog, catalog.default_capabilities)
+    if defaults is None:
+        return False
     return not any(_conflict(catalog, a, b) for a in defaults for b in defaults if a != b)
 
 
@@ -215,8 +217,17 @@ def _victims(catalog: Catalog, name: str) -> set[str]:
 
 def _needs(catalog: Catalog, name: str) -> frozenset[str] | None:
     """Capabilities `name` references (requirements included); None if one is undefined."""
+    return _closure(catalog, catalog.behaviors[name].capabilities)
+
+
+def _defaults(catalog: Catalog) -> frozenset[str]:
+    """What initiation holds: the default capabilities and everything they require."""
+    return _closure(catalog, catalog.default_capabilities) or frozenset()
+
+
+def _closure(catalog: Catalog, capabilities: Iterable[str]) -> frozenset[str] | None:
     seen: set[str] = set()
-    todo = list(catalog.behaviors[name].capabilities)
+    todo = list(capabilities)
     while todo:
         capability = todo.pop()
         if capability in seen:
@@ -328,7 +339,7 @@ class ExecutiveMachine(RuleBasedStateMachine):
         preempted = _victims(catalog, name)
         active = list(self.executive.coordinator.active)
         victims = [b for b in active if b == name or b in preempted]
-        keep: set[str] = set(catalog.default_capabilities)
+        keep: set[str] = set(_defaults(catalog))
         for other in active:
             if other not in victims:
                 keep |= _needs(catalog, other) or frozenset()
@@ -454,7 +465,7 @@ class ExecutiveMachine(RuleBasedStateMachine):
     def references_count_active_needs(self) -> None:
         if self.ex is None:
             return
-        expected: Counter[str] = Counter(self.catalog.default_capabilities)
+        expected: Counter[str] = Counter(_defaults(self.catalog))
         for name in self.active_uids():
             needs = _needs(self.catalog, name)
             assert needs is not None

@@ -124,7 +124,11 @@ class ResourceManager:
             self._publish()
 
     # -- work ----------------------------------------------------------------------------
-    def _initiate(self, defaults: tuple[str, ...]) -> ServiceResult:
+    def _initiate(self, declared: tuple[str, ...]) -> ServiceResult:
+        # A default capability holds the ones it requires for the whole session too.
+        defaults = self.specialist.expand_capabilities(declared, "the default capabilities")
+        if isinstance(defaults, str):
+            return failure(f"default capabilities cannot be started: {defaults}")
         problem = self.specialist.capability_conflict(defaults, frozenset())
         if problem:
             return failure(f"default capabilities cannot all be active: {problem}")

@@ -125,6 +125,13 @@ class BehaviorSpecialist:
         descriptor = self.catalog.behaviors.get(name)
         if descriptor is None:
             return f"unknown behavior {name}"
+        return self.expand_capabilities(descriptor.capabilities, name)
+
+    def expand_capabilities(
+        self, capabilities: tuple[str, ...], needed_by: str
+    ) -> tuple[str, ...] | str:
+        """`capabilities` with the ones they require, prerequisites first, each once; an
+        error text when one is undefined or requires itself."""
         order: list[str] = []
         visiting: set[str] = set()
 
@@ -145,8 +152,8 @@ class BehaviorSpecialist:
             order.append(capability)
             return None
 
-        for capability in descriptor.capabilities:
-            problem = visit(capability, name)
+        for capability in capabilities:
+            problem = visit(capability, needed_by)
             if problem:
                 return problem
         return tuple(order)

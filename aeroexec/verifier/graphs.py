@@ -226,8 +226,24 @@ class CatalogGraphs:
 
     @cached_property
     def defaults(self) -> tuple[str, ...]:
-        """Capabilities referenced at initiation (the executive does not expand them)."""
-        return self.catalog.default_capabilities
+        """Capabilities referenced at initiation: the default ones and those they require
+        (empty when that expansion fails, since initiation then fails)."""
+        return self._default_expansion or ()
+
+    @cached_property
+    def defaults_broken(self) -> bool:
+        """A default capability requires an undefined capability, or itself."""
+        return self._default_expansion is None
+
+    @cached_property
+    def _default_expansion(self) -> tuple[str, ...] | None:
+        merged: dict[str, None] = {}
+        for capability in self.catalog.default_capabilities:
+            closure = self._closures.get(capability)
+            if closure is None:
+                return None
+            merged.update(dict.fromkeys(closure))
+        return tuple(merged)
 
     @cached_property
     def holders(self) -> dict[str, tuple[str, ...]]:
@@ -303,7 +319,7 @@ class CatalogGraphs:
     def activatable(self) -> frozenset[str]:
         """Behaviors whose activation from a freshly initiated executive succeeds (as far
         as the catalog decides it)."""
-        initiated = not self.default_pairs_in_conflict
+        initiated = not (self.default_pairs_in_conflict or self.defaults_broken)
         return frozenset(
             name
             for name in self.catalog.behaviors

@@ -1,8 +1,9 @@
 """Witnesses: the shortest activation sequences that make a finding happen.
 
 `ActivationModel` is the executive's activation semantics reduced to sets
-(design.md section 2): initiation references the default capabilities and fails if two
-of them conflict; activating B is rejected if B is unknown, if one of its capabilities
+(design.md section 2): initiation references the default capabilities (with the ones
+they require) and fails if two of them conflict or one cannot be expanded; activating
+B is rejected if B is unknown, if one of its capabilities
 (expanded with the capabilities they require) is undefined or requires itself, or if
 one of its not-yet-referenced capabilities conflicts with another of them or with a
 capability still referenced once the behaviors B preempts (its incompatible lists,
@@ -49,7 +50,7 @@ class ActivationModel:
 
     @property
     def initiation_fails(self) -> bool:
-        return bool(self.graphs.default_pairs_in_conflict)
+        return bool(self.graphs.default_pairs_in_conflict) or self.graphs.defaults_broken
 
     def referenced(self, active: State) -> set[str]:
         refs = set() if self.initiation_fails else set(self.graphs.defaults)
