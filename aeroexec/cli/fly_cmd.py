@@ -8,7 +8,7 @@ import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
-from aeroexec.cli.run_cmd import _print_row, print_summary
+from aeroexec.cli.run_cmd import print_row, print_summary
 from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL
 from aeroexec.mavlink.vehicle import MavlinkVehicle
 from aeroexec.mission.activity import ActivityLog
@@ -88,13 +88,13 @@ def fly_command(
         allow_remote=allow_remote,
         connect_timeout=connect_timeout,
     )
-    printer = [] if quiet else [ActivityLog(on_change=_print_row)]
+    printer = [] if quiet else [ActivityLog(on_change=print_row)]
     try:
         result = fly(config, observers=printer, on_listening=_listening, on_connected=_connected)
     except KeyboardInterrupt:
         error_line("aeroexec: interrupted (a flying vehicle was told to brake and hold)")
         raise typer.Exit(130) from None
-    print_summary(result)
+    print_summary(result, clock="flown")
     typer.echo(f"mavlink: {result.metadata.get('link_summary', '')}")
     if result.recording:
         typer.echo(f"recorded to {result.recording}")

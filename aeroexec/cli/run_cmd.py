@@ -13,7 +13,7 @@ from aeroexec.mission.activity import Activation, ActivityLog, format_arguments
 from aeroexec.mission.session import SessionConfig, SessionResult, simulate
 
 
-def _print_row(row: Activation) -> None:
+def print_row(row: Activation) -> None:
     args = format_arguments(row.arguments)
     if not row.accepted:
         typer.echo(f"[{row.start_s:7.1f} s] REJECTED {row.behavior} {args}: {row.error}")
@@ -28,7 +28,8 @@ def _print_row(row: Activation) -> None:
         )
 
 
-def print_summary(result: SessionResult) -> None:
+def print_summary(result: SessionResult, clock: str = "simulated") -> None:
+    """The summary table and one line of totals; `clock` says whose seconds they are."""
     rows = [
         [
             str(i),
@@ -52,7 +53,7 @@ def print_summary(result: SessionResult) -> None:
     state = "flying" if result.final_state.flying else "landed"
     typer.echo(
         f"{len(result.activations)} activations: {achieved} GOAL_ACHIEVED, {rejected} rejected; "
-        f"{result.duration_s:.1f} s simulated; vehicle {state} at ({x:.2f}, {y:.2f}, {z:.2f})"
+        f"{result.duration_s:.1f} s {clock}; vehicle {state} at ({x:.2f}, {y:.2f}, {z:.2f})"
     )
 
 
@@ -83,7 +84,7 @@ def run(
     (mission, catalog, world) could not be read.
     """
     config = SessionConfig(mission=mission, catalog=catalog, seed=seed, world=world, record=record)
-    printer = [] if quiet else [ActivityLog(on_change=_print_row)]
+    printer = [] if quiet else [ActivityLog(on_change=print_row)]
     result = simulate(config, observers=printer)
     print_summary(result)
     if result.recording:
