@@ -192,22 +192,18 @@ class BagFile:
         by_id = {c.id: c for c in self.connections}
         count = 0
         last = self.start_ns
-        iterator = self._reader.messages()
-        while True:
-            try:
-                connection, time_ns, data = next(iterator)
-            except StopIteration:
-                return
-            except Exception as exc:  # damaged chunk: ReaderError, OSError (bz2), ...
-                where = "in the first chunk"
-                if count and last is not None:
-                    where = f"after {count} messages (bag time {last / 1e9:.3f} s)"
-                raise RecordingError(
-                    f"damaged bag data {where}: {_reason(exc)}", Mark(self.name)
-                ) from None
-            count += 1
-            last = time_ns
-            yield by_id[connection.id], time_ns, data
+        try:
+            for connection, time_ns, data in self._reader.messages():
+                count += 1
+                last = time_ns
+                yield by_id[connection.id], time_ns, data
+        except Exception as exc:  # damaged chunk: ReaderError, OSError (bz2), ...
+            where = "in the first chunk"
+            if count and last is not None:
+                where = f"after {count} messages (bag time {last / 1e9:.3f} s)"
+            raise RecordingError(
+                f"damaged bag data {where}: {_reason(exc)}", Mark(self.name)
+            ) from None
 
     def close(self) -> None:
         if self._reader.bio is not None:

@@ -183,20 +183,31 @@ def parse_arguments(text: str) -> dict[str, Any] | None:
     return {str(k): v for k, v in value.items()}
 
 
+def _float(value: object) -> float | None:
+    if type(value) is float:
+        return value
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return None
+
+
 def _floats(*values: object) -> tuple[float, ...] | None:
     out = []
     for value in values:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        number = _float(value)
+        if number is None:
             return None
-        out.append(float(value))
+        out.append(number)
     return tuple(out)
 
 
 def _yaw(orientation: object) -> float | None:
-    q = _floats(*(getattr(orientation, a, None) for a in "xyzw"))
-    if q is None:
+    x = _float(getattr(orientation, "x", None))
+    y = _float(getattr(orientation, "y", None))
+    z = _float(getattr(orientation, "z", None))
+    w = _float(getattr(orientation, "w", None))
+    if x is None or y is None or z is None or w is None:
         return None
-    x, y, z, w = q
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
@@ -211,19 +222,20 @@ def pose(message: object) -> Pose | None:
         message = inner
     position = getattr(message, "position", None)
     if position is not None:
-        xyz = _floats(*(getattr(position, a, None) for a in "xyz"))
+        x = _float(getattr(position, "x", None))
+        y = _float(getattr(position, "y", None))
+        z = _float(getattr(position, "z", None))
         yaw = _yaw(getattr(message, "orientation", None))
-        if xyz is None or yaw is None:
+        if x is None or y is None or z is None or yaw is None:
             return None
-        return Pose((xyz[0], xyz[1], xyz[2]), yaw)
-    xy = _floats(getattr(message, "x", None), getattr(message, "y", None))
-    if xy is None:
+        return Pose((x, y, z), yaw)
+    x = _float(getattr(message, "x", None))
+    y = _float(getattr(message, "y", None))
+    z = _float(getattr(message, "z", 0.0))
+    heading = _float(_field(message, "yaw", "theta"))
+    if x is None or y is None or z is None or heading is None:
         return None
-    z = _floats(getattr(message, "z", 0.0))
-    heading = _floats(_field(message, "yaw", "theta"))
-    if z is None or heading is None:
-        return None
-    return Pose((xy[0], xy[1], z[0]), heading[0])
+    return Pose((x, y, z), heading)
 
 
 def velocity(message: object) -> tuple[float, float, float] | None:

@@ -20,7 +20,6 @@ import contextlib
 import heapq
 import os
 import tempfile
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,6 +32,7 @@ from aeroexec.bags.derive import (
     CapabilityTracker,
     ProcessTracker,
     VehicleStateBuilder,
+    pose_in_frame,
 )
 from aeroexec.bags.mapping import Kind, Mapping, Rule, check_drone, load_mapping
 from aeroexec.bags.reconstruct import ACTIVATE, INHIBIT, Reconstructor, Stats
@@ -47,6 +47,8 @@ VEHICLE = "ros1-bag"
 BAG_METADATA = "ros1_bag"
 MAPPING_ATTACHMENT = "bag_mapping.yaml"
 _NS = 1_000_000_000
+#: Kinds of which only the latest message before a vehicle state matters.
+_LATEST_ONLY = frozenset({Kind.VELOCITY, Kind.BATTERY, Kind.FLIGHT_STATUS})
 _BEHAVIOR_KINDS = frozenset(
     {Kind.BEHAVIOR_EVENT, Kind.ACTIVE_BEHAVIORS, Kind.ACTIVATE_COMMAND, Kind.INHIBIT_COMMAND}
 )
@@ -112,6 +114,11 @@ class ImportReport:
         return "\n".join(lines)
 
 
+#: A mapped message kept undecoded until it is needed: ((kind, decoder), connection,
+#: log time, bytes).
+_Pending = tuple[tuple[Kind, Decoder], BagConnection, int, bytes]
+
+
 class _Ordered:
     """Writes messages in (time, rank, arrival) order. A message is held until bag time
     has moved past its instant and past the reconstruction horizon, so that the
@@ -122,19 +129,38 @@ class _Ordered:
     RECONSTRUCTED = 0
     OTHER = 1
 
-    def __init__(self) -> None:
-        self._heap: list[tuple[int, int, int, Callable[[], None]]] = []
+    def __init__(self, sink: ImportSink) -> None:
+        self._sink = sink
+        #: (time, rank, arrival, connection or None, raw bytes or topic, payload, call)
+        self._heap: list[tuple[int, int, int, BagConnection | None, Any, Any, bool]] = []
         self._order = 0
 
-    def put(self, time_ns: int, rank: int, action: Callable[[], None]) -> None:
+    def raw(self, time_ns: int, connection: BagConnection, data: bytes) -> None:
         self._order += 1
-        heapq.heappush(self._heap, (time_ns, rank, self._order, action))
+        heapq.heappush(
+            self._heap, (time_ns, self.OTHER, self._order, connection, data, None, False)
+        )
+
+    def derived(
+        self, time_ns: int, rank: int, topic: str, data: dict[str, Any], call: bool = False
+    ) -> None:
+        self._order += 1
+        heapq.heappush(self._heap, (time_ns, rank, self._order, None, topic, data, call))
+
+    @property
+    def held(self) -> bool:
+        return bool(self._heap)
 
     def release(self, limit: int | None) -> None:
         """Write every message before `limit` (everything when None)."""
         heap = self._heap
+        sink = self._sink
         while heap and (limit is None or heap[0][0] < limit):
-            heapq.heappop(heap)[3]()
+            time_ns, _, _, connection, first, data, call = heapq.heappop(heap)
+            if connection is not None:
+                sink.raw(connection, time_ns, first)
+            else:
+                sink.derived_message(first, time_ns, data, call)
 
 
 class _Import:
@@ -145,9 +171,13 @@ class _Import:
         self.drone = drone
         self.sink = sink
         self.notes: list[str] = []
-        self.out = _Ordered()
+        self.out = _Ordered(sink)
         self.recon = Reconstructor(mapping.grace_ns)
         self.vehicle = VehicleStateBuilder()
+        self.period = mapping.state_period_ns
+        self._last_state_ns: int | None = None
+        self._skipped: _Pending | None = None
+        self._latest: dict[Kind, _Pending] = {}
         self.capabilities = CapabilityTracker()
         self.beliefs = BeliefTracker()
         self.processes = ProcessTracker()
@@ -201,42 +231,78 @@ class _Import:
         recon = self.recon
         sink = self.sink
         handlers = self.handlers
+        out = self.out
+        reconstructing = self.reconstructing
+        decide_after = 2 * recon.grace  # an input is decided once this much later is read
         direct = True  # nothing held: a message may be written as it comes
         for connection, time_ns, data in self.bag.messages():
-            if self.reconstructing:
-                recon.advance(time_ns)
-                self._take_reconstruction()
+            if reconstructing:
                 horizon = recon.horizon
-                self.out.release(time_ns if horizon is None else min(time_ns, horizon))
+                if horizon is not None and horizon < time_ns - decide_after:
+                    recon.advance(time_ns)
+                    self._take_reconstruction()
+                    horizon = recon.horizon
+                if out.held:
+                    out.release(time_ns if horizon is None else min(time_ns, horizon))
                 # Raw messages need no rank: with nothing older held, write at once.
                 direct = horizon is None
             if direct:
                 sink.raw(connection, time_ns, data)
             else:
-                self.out.put(time_ns, _Ordered.OTHER, _bind(sink.raw, connection, time_ns, data))
+                self.out.raw(time_ns, connection, data)
             entry = handlers.get(connection.id)
             if entry is not None:
                 self._handle(entry, connection, time_ns, data)
+        if self._skipped is not None:  # the last pose always gives the final state
+            self._flush_latest()
+            self._decode(*self._skipped)
         recon.finish()
         self._take_reconstruction()
         self.out.release(None)
 
     def _take_reconstruction(self) -> None:
         for output in self.recon.take():
-            action = _bind(
-                self.sink.derived_message, output.topic, output.time_ns, output.data, output.call
+            self.out.derived(
+                output.time_ns, _Ordered.RECONSTRUCTED, output.topic, output.data, output.call
             )
-            self.out.put(output.time_ns, _Ordered.RECONSTRUCTED, action)
+
+    def _state(self, pose: extract.Pose, time_ns: int) -> None:
+        self._last_state_ns = time_ns
+        self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
+        in_frame = pose_in_frame(pose, time_ns)
+        if in_frame is not None:
+            self._derive("vehicle/pose", time_ns, in_frame)
 
     def _derive(self, topic: str, time_ns: int, data: dict[str, Any]) -> None:
         if not self.reconstructing:
             self.sink.derived_message(topic, time_ns, data)
             return
-        self.out.put(
-            time_ns, _Ordered.OTHER, _bind(self.sink.derived_message, topic, time_ns, data)
-        )
+        self.out.derived(time_ns, _Ordered.OTHER, topic, data)
 
     def _handle(
+        self, entry: tuple[Kind, Decoder], connection: BagConnection, time_ns: int, data: bytes
+    ) -> None:
+        """Decode what is used, when it is used: a pose only when it gives a state (or
+        is the last one), velocity/battery/status only the latest before such a pose."""
+        kind = entry[0]
+        if kind is Kind.POSE:
+            last = self._last_state_ns
+            if last is not None and time_ns - last < self.period:
+                self._skipped = (entry, connection, time_ns, data)
+                return
+            self._skipped = None
+            self._flush_latest()
+        elif kind in _LATEST_ONLY:
+            self._latest[kind] = (entry, connection, time_ns, data)
+            return
+        self._decode(entry, connection, time_ns, data)
+
+    def _flush_latest(self) -> None:
+        for latest in self._latest.values():
+            self._decode(*latest)
+        self._latest.clear()
+
+    def _decode(
         self, entry: tuple[Kind, Decoder], connection: BagConnection, time_ns: int, data: bytes
     ) -> None:
         kind, decoder = entry
@@ -254,7 +320,7 @@ class _Import:
             pose = extract.pose(message)
             if pose is None:
                 return False
-            self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
+            self._state(pose, time_ns)
         elif kind is Kind.VELOCITY:
             velocity = extract.velocity(message)
             if velocity is None:
@@ -351,10 +417,6 @@ class _Import:
         return notes
 
 
-def _bind(func: Callable[..., None], *args: Any) -> Callable[[], None]:
-    return lambda: func(*args)
-
-
 def _metadata(bag: BagFile, mapping: Mapping, drone: str) -> dict[str, dict[str, str]]:
     return {
         METADATA_NAME: {
@@ -365,6 +427,7 @@ def _metadata(bag: BagFile, mapping: Mapping, drone: str) -> dict[str, dict[str,
             "source": Path(bag.name).name,
             "mapping": mapping.source,
             "grace_s": f"{mapping.grace_ns / _NS:g}",
+            "state_period_s": f"{mapping.state_period_ns / _NS:g}",
         },
         BAG_METADATA: {
             "file": Path(bag.name).name,
@@ -392,7 +455,7 @@ def import_bag(
     `drone`: the namespace (default: the mapping's). `RecordingError` (one line) when the
     bag, the mapping or the output cannot be used; then no output file is left."""
     if compression not in COMPRESSIONS:
-        raise ValueError(f"compression must be one of {sorted(COMPRESSIONS)}")
+        raise ValueError(f"compression must be one of {COMPRESSIONS}")
     if not isinstance(mapping, Mapping):
         mapping = load_mapping(mapping)
     drone = check_drone(drone if drone is not None else mapping.drone, Mark("--drone"))

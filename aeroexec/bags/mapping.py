@@ -6,6 +6,7 @@ has Aerostack's 2017-2018 names)::
     version: 1
     drone: drone1          # what {drone} stands for (the import's --drone overrides it)
     grace_s: 0.5           # how far apart related messages may be (see reconstruct.py)
+    state_period_s: 0.1    # vehicle/state at most this often (0: at every pose)
     topics:
       - {topic: "/{drone}/behavior_event", kind: behavior_event}
       - {topic: "/{drone}/EstimatedPose_droneGMR_wrt_GFF", kind: pose}
@@ -34,6 +35,8 @@ from aeroexec.errors import CatalogError, Mark, RecordingError
 #: The mapping format's version (the `version:` key).
 FORMAT_VERSION = 1
 DEFAULT_GRACE_S = 0.5
+#: vehicle/state at most every 0.1 s of bag time: the executive's own tick (10 Hz).
+DEFAULT_STATE_PERIOD_S = 0.1
 DEFAULT_MAPPING_NAME = "aerostack.yaml"
 
 
@@ -54,7 +57,7 @@ class Kind(str, Enum):
 
 
 _RULE_KEYS = ("topic", "type", "kind")
-_TOP_KEYS = ("version", "drone", "grace_s", "topics")
+_TOP_KEYS = ("version", "drone", "grace_s", "state_period_s", "topics")
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +86,8 @@ class Mapping:
     rules: tuple[Rule, ...]
     drone: str
     grace_ns: int
+    #: Minimum bag time between two vehicle/state messages (0: one per pose).
+    state_period_ns: int
     #: Where it came from (file name), and its text (kept as an attachment of the import).
     source: str
     text: str
@@ -140,14 +145,15 @@ def parse_mapping(text: str, name: str) -> Mapping:
             version.mark,
         )
     drone = _drone(root.get("drone"))
-    grace_ns = _grace(root.get("grace_s"))
+    grace_ns = _seconds(root.get("grace_s"), "grace_s", DEFAULT_GRACE_S)
+    period_ns = _seconds(root.get("state_period_s"), "state_period_s", DEFAULT_STATE_PERIOD_S)
     topics = root.get("topics")
     if topics is None:
         raise RecordingError("missing `topics:` (the list of mapped topics)", root.mark)
     if not topics.is_list:
         raise RecordingError("`topics:` must be a list of {topic, type, kind}", topics.mark)
     rules = tuple(_rule(item) for item in topics.value)
-    return Mapping(rules, drone, grace_ns, name, text)
+    return Mapping(rules, drone, grace_ns, period_ns, name, text)
 
 
 def check_drone(value: object, mark: Mark) -> str:
@@ -165,14 +171,14 @@ def _drone(node: YNode | None) -> str:
     return check_drone(node.value, node.mark)
 
 
-def _grace(node: YNode | None) -> int:
+def _seconds(node: YNode | None, key: str, default: float) -> int:
     if node is None:
-        return round(DEFAULT_GRACE_S * 1e9)
+        return round(default * 1e9)
     value = node.value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise RecordingError(f"grace_s must be a number of seconds, not {value!r}", node.mark)
+        raise RecordingError(f"{key} must be a number of seconds, not {value!r}", node.mark)
     if not math.isfinite(value) or not 0 <= value <= 60:
-        raise RecordingError(f"grace_s must be between 0 and 60 seconds, not {value!r}", node.mark)
+        raise RecordingError(f"{key} must be between 0 and 60 seconds, not {value!r}", node.mark)
     return round(value * 1e9)
 
 

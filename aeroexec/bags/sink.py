@@ -20,11 +20,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import IO, Any
 
-from mcap.writer import CompressionType, Writer
-
 from aeroexec.bags.bagfile import BagConnection
+from aeroexec.bags.mcapwriter import BulkMcapWriter
 from aeroexec.recording.schemas import (
-    FOXGLOVE_POSE,
     MESSAGE_ENCODING,
     PROFILE,
     SCHEMA_ENCODING,
@@ -32,16 +30,12 @@ from aeroexec.recording.schemas import (
     schema_for,
     schema_name_for_topic,
 )
-from aeroexec.recording.writer import LIBRARY, METADATA_NAME, encode_json, pose_message
+from aeroexec.recording.writer import LIBRARY, METADATA_NAME, encode_json
 
 RAW_PREFIX = "/ros1"
 RAW_SCHEMA_ENCODING = "ros1msg"
 RAW_MESSAGE_ENCODING = "ros1"
-COMPRESSIONS = {
-    "lz4": CompressionType.LZ4,
-    "zstd": CompressionType.ZSTD,
-    "none": CompressionType.NONE,
-}
+COMPRESSIONS = ("lz4", "zstd", "none")
 CHUNK_SIZE = 1024 * 1024
 
 
@@ -51,7 +45,7 @@ def raw_topic(topic: str) -> str:
 
 class ImportSink:
     def __init__(self, stream: IO[bytes], drone: str, compression: str = "lz4") -> None:
-        self._writer = Writer(stream, chunk_size=CHUNK_SIZE, compression=COMPRESSIONS[compression])
+        self._writer = BulkMcapWriter(stream, compression=compression, chunk_size=CHUNK_SIZE)
         self._prefix = f"/{drone}/"
         self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._raw: dict[int, int] = {}  # bag connection id -> channel id
@@ -69,16 +63,14 @@ class ImportSink:
         for name, values in metadata.items():
             self._writer.add_metadata(name, dict(values))
         for name, data in attachments.items():
-            self._writer.add_attachment(
-                create_time=0, log_time=0, name=name, media_type="application/yaml", data=data
-            )
+            self._writer.add_attachment(name, "application/yaml", data)
 
     # -- channels ----------------------------------------------------------------------------
     def _schema(self, name: str, encoding: str, data: bytes) -> int:
         key = (name, encoding, data)
         schema = self._schemas.get(key)
         if schema is None:
-            schema = self._writer.register_schema(name=name, encoding=encoding, data=data)
+            schema = self._writer.register_schema(name, encoding, data)
             self._schemas[key] = schema
         return schema
 
@@ -94,10 +86,7 @@ class ImportSink:
             if connection.latching is not None:
                 metadata["latching"] = "true" if connection.latching else "false"
             channel = self._writer.register_channel(
-                topic=raw_topic(connection.topic),
-                message_encoding=RAW_MESSAGE_ENCODING,
-                schema_id=schema,
-                metadata=metadata,
+                raw_topic(connection.topic), RAW_MESSAGE_ENCODING, schema, metadata
             )
             self._raw[connection.id] = channel
         return channel
@@ -108,17 +97,16 @@ class ImportSink:
             definition = schema_for(schema_name)
             schema = self._schema(definition.name, SCHEMA_ENCODING, definition.data)
             channel = self._writer.register_channel(
-                topic=self._prefix + topic,
-                message_encoding=MESSAGE_ENCODING,
-                schema_id=schema,
-                metadata={},
+                self._prefix + topic, MESSAGE_ENCODING, schema, {}
             )
             self._json[topic] = channel
         return channel
 
     # -- messages ----------------------------------------------------------------------------
     def raw(self, connection: BagConnection, log_time_ns: int, data: bytes) -> None:
-        self._add(self.raw_channel(connection), log_time_ns, data)
+        channel = self._raw.get(connection.id) or self.raw_channel(connection)
+        self._writer.add_message(channel, log_time_ns, data, log_time_ns, self._sequence)
+        self._sequence += 1
         self.raw_messages += 1
 
     def derived_message(
@@ -134,21 +122,9 @@ class ImportSink:
             channel = self._json_channel(topic, schema_name_for_topic(topic))
         self._add(channel, log_time_ns, encode_json(data))
         self.derived[topic] = self.derived.get(topic, 0) + 1
-        if topic == "vehicle/state":
-            pose = pose_message(data, log_time_ns)
-            if pose is not None:
-                channel = self._json_channel("vehicle/pose", FOXGLOVE_POSE)
-                self._add(channel, log_time_ns, encode_json(pose))
-                self.derived["vehicle/pose"] = self.derived.get("vehicle/pose", 0) + 1
 
     def _add(self, channel: int, log_time_ns: int, data: bytes) -> None:
-        self._writer.add_message(
-            channel_id=channel,
-            log_time=log_time_ns,
-            data=data,
-            publish_time=log_time_ns,
-            sequence=self._sequence,
-        )
+        self._writer.add_message(channel, log_time_ns, data, log_time_ns, self._sequence)
         self._sequence += 1
 
     def finish(self) -> None:
