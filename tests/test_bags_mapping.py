@@ -7,7 +7,14 @@ import math
 from pathlib import Path
 
 import pytest
-from test_bags_support import AEROSTACK_BAG, TURTLE_LZ4, short_mission
+from test_bags_support import (
+    AEROSTACK_BAG,
+    NS,
+    TURTLE_LZ4,
+    short_mission,
+    state_times,
+    topic_times,
+)
 from typer.testing import CliRunner
 
 from aeroexec.bags import Kind, import_bag, load_mapping
@@ -33,22 +40,27 @@ def test_the_default_mapping_has_aerostacks_names() -> None:
 def test_the_first_listed_pose_wins_and_a_mapping_file_can_prefer_another(
     tmp_path: Path,
 ) -> None:
-    """The real bag has both EstimatedPose_droneGMR_wrt_GFF (432) and SOEstimatedPose
-    (443): the default takes the first; a mapping listing SOEstimatedPose takes that."""
+    """The real bag has both EstimatedPose_droneGMR_wrt_GFF and SOEstimatedPose: the
+    default takes the first; a mapping listing SOEstimatedPose takes that."""
     default = import_bag(AEROSTACK_BAG, tmp_path / "a.mcap")
     assert default.mapped["pose"] == "/drone1/EstimatedPose_droneGMR_wrt_GFF"
-    assert default.derived["vehicle/state"] == 432
+    first = topic_times(AEROSTACK_BAG, "/drone1/EstimatedPose_droneGMR_wrt_GFF")
+    so = topic_times(AEROSTACK_BAG, "/drone1/SOEstimatedPose")
+    assert default.derived["vehicle/state"] == len(state_times(first))
     custom = tmp_path / "so.yaml"
     custom.write_text('topics:\n  - {topic: "/{drone}/SOEstimatedPose", kind: pose}\n')
     other = import_bag(AEROSTACK_BAG, tmp_path / "b.mcap", mapping=custom)
     assert other.mapped == {"pose": "/drone1/SOEstimatedPose"}
-    assert other.derived["vehicle/state"] == 443
+    assert other.derived["vehicle/state"] == len(state_times(so))
+    assert len(state_times(so)) != len(state_times(first))
     assert "process_state" not in other.derived  # the custom file replaces the default
 
 
 def test_a_type_rule_takes_the_first_topic_of_that_type(tmp_path: Path) -> None:
     custom = tmp_path / "turtle.yaml"
-    custom.write_text("drone: turtle\ntopics:\n  - {type: turtlesim/Pose, kind: pose}\n")
+    custom.write_text(
+        "drone: turtle\nstate_period_s: 0\ntopics:\n  - {type: turtlesim/Pose, kind: pose}\n"
+    )
     report = import_bag(TURTLE_LZ4, tmp_path / "t.mcap", mapping=custom)
     assert report.mapped == {"pose": "/turtle1/pose"}
     states = [
@@ -79,7 +91,7 @@ def test_drone_namespace_selects_topics_and_names_channels(tmp_path: Path) -> No
 @pytest.mark.parametrize("flag", ["--mapping", "-m"])
 def test_cli_mapping_and_drone_options(tmp_path: Path, flag: str) -> None:
     custom = tmp_path / "turtle.yaml"
-    custom.write_text('topics:\n  - {topic: "/turtle2/pose", kind: pose}\n')
+    custom.write_text('state_period_s: 0.5\ntopics:\n  - {topic: "/turtle2/pose", kind: pose}\n')
     result = CliRunner().invoke(
         app,
         [
@@ -95,4 +107,6 @@ def test_cli_mapping_and_drone_options(tmp_path: Path, flag: str) -> None:
     )
     assert result.exit_code == 0, result.stderr
     assert "pose                 <- /turtle2/pose" in result.stdout
-    assert "derived /t2/: vehicle/state 1344, vehicle/pose 1344" in result.stdout
+    states = len(state_times(topic_times(TURTLE_LZ4, "/turtle2/pose"), NS // 2))
+    assert states == 43  # 1344 poses over ~21 s: one state per 0.5 s, and the last pose
+    assert f"derived /t2/: vehicle/state {states}, vehicle/pose {states}" in result.stdout

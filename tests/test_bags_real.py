@@ -14,7 +14,15 @@ import jsonschema
 import pytest
 from mcap.reader import make_reader
 from rosbags.rosbag1 import Reader
-from test_bags_support import AEROSTACK_BAG, REAL_BAGS, ROTORS_BAG, TURTLE_BZ2, TURTLE_LZ4
+from test_bags_support import (
+    AEROSTACK_BAG,
+    REAL_BAGS,
+    ROTORS_BAG,
+    TURTLE_BZ2,
+    TURTLE_LZ4,
+    state_times,
+    topic_times,
+)
 from typer.testing import CliRunner
 
 from aeroexec.bags import import_bag
@@ -128,7 +136,8 @@ def test_the_import_is_an_aeroexec_recording_with_bag_metadata(imported: dict[st
 
 def test_derived_channels_of_the_real_aerostack_bag(imported: dict[str, Path]) -> None:
     """The 2017 bag has no behavior topics but poses, battery, status and the
-    heartbeats of ~35 processes: vehicle/state per pose, one process_state each."""
+    heartbeats of ~35 processes: vehicle/state at most every 0.1 s of its 432 poses (and
+    the last one), one process_state each."""
     recording = open_recording(imported[AEROSTACK_BAG.name])
     states, processes = [], []
     for record in recording.records():
@@ -136,7 +145,10 @@ def test_derived_channels_of_the_real_aerostack_bag(imported: dict[str, Path]) -
             states.append(record)
         elif record.topic == "/drone1/process_state":
             processes.append(record.data)
-    assert len(states) == 432  # one per /drone1/EstimatedPose_droneGMR_wrt_GFF message
+    poses = topic_times(AEROSTACK_BAG, "/drone1/EstimatedPose_droneGMR_wrt_GFF")
+    assert len(poses) == 432
+    assert [s.log_time_ns for s in states] == state_times(poses)
+    assert len(states) == 123
     assert len(processes) == 35
     names = {p["process"] for p in processes}
     assert {"droneCommand", "behavior_specialist_process", "resource_manager_process"} <= names
@@ -169,7 +181,8 @@ def test_derived_json_messages_follow_the_profile_schemas(imported: dict[str, Pa
                 assert schema is not None and schema.encoding == "jsonschema"
                 jsonschema.validate(json.loads(message.data), json.loads(schema.data))
                 checked += 1
-    assert checked > 6577 * 2  # the rotors bag's ground-truth poses: state + pose each
+    # vehicle/state + vehicle/pose of both bags, and the real bag's 35 process changes
+    assert checked == 2 * (123 + 659) + 35
 
 
 def test_a_posestamped_bag_gets_vehicle_state_from_its_first_posestamped_topic(
@@ -177,7 +190,9 @@ def test_a_posestamped_bag_gets_vehicle_state_from_its_first_posestamped_topic(
 ) -> None:
     recording = open_recording(imported[ROTORS_BAG.name])
     counts = recording.survey().topic_counts()
-    assert counts["/drone1/vehicle/state"] == 6577  # /ground_truth/pose
+    poses = topic_times(ROTORS_BAG, "/ground_truth/pose")
+    assert len(poses) == 6577
+    assert counts["/drone1/vehicle/state"] == len(state_times(poses)) == 659
     assert "/drone1/behavior_event" not in counts  # nothing invented
 
 
@@ -193,11 +208,39 @@ def test_only_mapped_topics_are_deserialized(
 
     monkeypatch.setattr(Decoder, "decode", counting)
     import_bag(AEROSTACK_BAG, tmp_path / "a.mcap")
-    # pose 432 + speed 469 + battery 177 + status 177 + process_alive_signal 3395
-    assert len(calls) == 432 + 469 + 177 + 177 + 3395
+    # Every process heartbeat (3395); a pose only when it gives a vehicle/state; speed,
+    # battery and status only the latest one before such a pose.
+    pose = "/drone1/EstimatedPose_droneGMR_wrt_GFF"
+    latest_only = {
+        "/drone1/EstimatedSpeed_droneGMR_wrt_GFF",
+        "/drone1/battery",
+        "/drone1/status",
+    }
+    emitted = set(state_times(topic_times(AEROSTACK_BAG, pose)))
+    expected, pending = 3395, set()
+    with Reader(AEROSTACK_BAG) as reader:
+        for connection, time_ns, _ in reader.messages():
+            if connection.topic in latest_only:
+                pending.add(connection.topic)
+            elif connection.topic == pose and time_ns in emitted:
+                expected += 1 + len(pending)
+                pending.clear()
+    assert len(calls) == expected
+    assert expected < 432 + 469 + 177 + 177 + 3395  # what decoding every mapped one costs
     calls.clear()
     import_bag(TURTLE_LZ4, tmp_path / "t.mcap")
     assert calls == []  # nothing of turtlesim is mapped: pure byte copy
+
+
+def test_every_pose_gives_a_state_with_a_zero_period(tmp_path: Path) -> None:
+    mapping = tmp_path / "every.yaml"
+    mapping.write_text(
+        "state_period_s: 0\ntopics:\n  - {type: geometry_msgs/PoseStamped, kind: pose}\n"
+    )
+    report = import_bag(ROTORS_BAG, tmp_path / "r.mcap", mapping=mapping)
+    assert report.derived == {"vehicle/state": 6577, "vehicle/pose": 6577}
+    states = [r for r in open_recording(tmp_path / "r.mcap").records() if r.name == "vehicle/state"]
+    assert [s.log_time_ns for s in states] == topic_times(ROTORS_BAG, "/ground_truth/pose")
 
 
 def test_importing_twice_gives_the_same_bytes(tmp_path: Path) -> None:
@@ -247,10 +290,10 @@ def test_import_cli_reports_and_writes(tmp_path: Path) -> None:
     report = json.loads(out)
     assert report["messages"] == 10046
     assert report["mapped"]["pose"] == "/drone1/EstimatedPose_droneGMR_wrt_GFF"
-    assert report["derived"]["vehicle/state"] == 432
+    assert report["derived"]["vehicle/state"] == 123
     assert target.exists()
     code, out, _ = _invoke("info", str(target), "--format", "json")
     assert code == 0
     info = json.loads(out)
     assert info["profile"] == "aeroexec"
-    assert info["messages"] == 10046 + 432 * 2 + 35
+    assert info["messages"] == 10046 + 123 * 2 + 35

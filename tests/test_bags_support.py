@@ -42,6 +42,26 @@ _REAL_TYPES = (
 )
 
 
+def topic_times(path: Path, topic: str) -> list[int]:
+    """Log times of `topic`'s messages, as rosbags reads them."""
+    with Reader(path) as reader:
+        connections = [c for c in reader.connections if c.topic == topic]
+        return [t for _, t, _ in reader.messages(connections)]
+
+
+def state_times(pose_times: list[int], period_ns: int = NS // 10) -> list[int]:
+    """When the import writes vehicle/state for poses at `pose_times`: the first pose,
+    then the first pose at least `period_ns` after the last written one, and the last
+    pose in any case (the final state)."""
+    out: list[int] = []
+    for t in pose_times:
+        if not out or t - out[-1] >= period_ns:
+            out.append(t)
+    if pose_times and out[-1] != pose_times[-1]:
+        out.append(pose_times[-1])
+    return out
+
+
 def real_definitions() -> dict[str, tuple[str, str]]:
     """msgtype -> (message definition, md5sum), as the real Aerostack bag has them."""
     found: dict[str, tuple[str, str]] = {}
