@@ -1,0 +1,189 @@
+"""Benchmark: `aeroexec import` of ROS 1 bags vs rosbags reading them (design.md section 10).
+
+For each bag: the time of `aeroexec.bags.import_bag` (read every message, copy it raw to
+the MCAP output, decode only the mapped topics, derive and write the aeroexec channels)
+against rosbags reading and deserializing every message of the same bag. Two baselines:
+
+* cold: open the bag, build a type store per distinct connection definition, read and
+  deserialize every message (what a script using rosbags does from scratch);
+* warm: the same with the type stores built beforehand (rosbags' code generation for
+  the ~40 types of the Aerostack bag costs more than reading it): the stricter figure.
+
+Bags: the four real test fixtures (tests/fixtures/bags/), and a synthetic Aerostack
+mission written here (--minutes of flight: PoseStamped at 30 Hz, an activation every 2 s
+with its end event and active lists), where the commands are reconstructed and every
+derived message goes through the reorder heap.
+
+Definitions are parsed with aeroexec's lenient `.msg` parser (rosbags' own refuses the
+CamelCase constants of Aerostack's ProcessState), so the baseline decodes everything.
+Target: import <= 2x rosbags (against the warm baseline). Best of --repeat runs, in one
+process. Prints the figures and the target; exits 1 when a target is missed.
+
+    .venv/bin/python benchmarks/bag_import.py [--repeat 5] [BAG ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from rosbags.rosbag1 import Reader, Writer
+
+from aeroexec.bags import import_bag
+from aeroexec.bags.types import Decoder, TypeResolver, aerostack_typestore
+
+TARGET = 2.0
+FIXTURES = Path(__file__).resolve().parent.parent / "tests" / "fixtures" / "bags"
+DEFAULT_BAGS = (
+    "aerostack_2017_first_view_ros1.bag",
+    "ros1_rotors_waypoint_example_uncompressed.bag",
+    "ros1_turtlesim_example_bz2.bag",
+    "ros1_turtlesim_example_lz4.bag",
+)
+
+
+def synthetic_mission(path: Path, minutes: float) -> Path:
+    """An Aerostack-style bag: PoseStamped at 30 Hz; every 2 s a behavior appears in the
+    active list, and ends GOAL_ACHIEVED 1.5 s later (event, then the list without it)."""
+    store = aerostack_typestore()
+    pose_t = "geometry_msgs/msg/PoseStamped"
+    event_t = "droneMsgsROS/msg/BehaviorEvent"
+    list_t = "droneMsgsROS/msg/ListOfBehaviors"
+    types = store.types
+    start = 1_500_000_000 * 10**9
+    messages: list[tuple[int, str, object]] = []
+    steps = int(minutes * 60 * 30)
+    for i in range(steps):
+        t = start + i * 10**9 // 30
+        stamp = types["builtin_interfaces/msg/Time"](sec=t // 10**9, nanosec=t % 10**9)
+        header = types["std_msgs/msg/Header"](seq=i, stamp=stamp, frame_id="world")
+        point = types["geometry_msgs/msg/Point"](x=i * 0.01, y=0.0, z=1.0)
+        quat = types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)
+        pose = types["geometry_msgs/msg/Pose"](position=point, orientation=quat)
+        messages.append((t, pose_t, types[pose_t](header=header, pose=pose)))
+    header0 = types["std_msgs/msg/Header"](
+        seq=0, stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""
+    )
+    for k in range(int(minutes * 30)):
+        t = start + k * 2 * 10**9
+        name = ("GO_TO_POINT", "ROTATE", "WAIT")[k % 3]
+        command = types["droneMsgsROS/msg/BehaviorCommand"](name=name, arguments="")
+        listed = types[list_t](behaviors=[name], behavior_commands=[command])
+        messages.append((t, list_t, listed))
+        event = types[event_t](
+            header=header0,
+            name=name,
+            uid=float(k),
+            failed_belief="",
+            belief_conflict="",
+            behavior_event_code="GOAL_ACHIEVED",
+        )
+        messages.append((t + 1_500_000_000, event_t, event))
+        messages.append(
+            (t + 1_510_000_000, list_t, types[list_t](behaviors=[], behavior_commands=[]))
+        )
+    topics = {
+        pose_t: "/drone1/self_localization/pose",
+        event_t: "/drone1/behavior_event",
+        list_t: "/drone1/list_of_active_behaviors",
+    }
+    with Writer(path) as writer:
+        connections = {
+            msgtype: writer.add_connection(topic, msgtype, typestore=store)
+            for msgtype, topic in topics.items()
+        }
+        for t, msgtype, message in sorted(messages, key=lambda m: m[0]):
+            writer.write(connections[msgtype], t, store.serialize_ros1(message, msgtype))
+    return path
+
+
+def _best(action: Callable[[], object], repeat: int) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        action()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def _decoders(reader: Reader) -> dict[int, Decoder]:
+    resolver = TypeResolver()
+    found: dict[int, Decoder] = {}
+    for c in reader.connections:
+        with contextlib.suppress(ValueError):  # an undecodable type: counted below
+            found[c.id] = resolver.decoder(c.msgtype, c.msgdef.data, c.digest)
+    return found
+
+
+def rosbags_cold(path: Path) -> int:
+    """Read and deserialize every message, building the types first. Messages decoded."""
+    decoded = 0
+    with Reader(path) as reader:
+        decoders = _decoders(reader)
+        for connection, _, data in reader.messages():
+            decoder = decoders.get(connection.id)
+            if decoder is not None:
+                decoder.decode(data)
+                decoded += 1
+    return decoded
+
+
+def rosbags_warm(path: Path, decoders: dict[int, Decoder]) -> None:
+    with Reader(path) as reader:
+        for connection, _, data in reader.messages():
+            decoder = decoders.get(connection.id)
+            if decoder is not None:
+                decoder.decode(data)
+
+
+def measure(path: Path, workdir: Path, repeat: int) -> tuple[float, float, float, int, int]:
+    """(import, cold, warm, messages, decoded by the baseline)."""
+    target = workdir / (path.stem + ".mcap")
+    report = import_bag(path, target)  # warm-up: imports, caches
+    decoded = rosbags_cold(path)
+    with Reader(path) as reader:
+        decoders = _decoders(reader)
+    imp = cold = warm = float("inf")
+    for _ in range(repeat):  # interleaved, so drift hits all three alike
+        imp = min(imp, _best(lambda: import_bag(path, target), 1))
+        cold = min(cold, _best(lambda: rosbags_cold(path), 1))
+        warm = min(warm, _best(lambda: rosbags_warm(path, decoders), 1))
+    return imp, cold, warm, report.messages, decoded
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("bags", nargs="*", type=Path, help="bags (default: the test fixtures)")
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--minutes", type=float, default=10.0, help="synthetic mission length")
+    args = parser.parse_args(argv)
+    failed = False
+    print(f"ROS 1 bag import vs rosbags read + deserialize (target <= {TARGET:g}x the warm one)")
+    with tempfile.TemporaryDirectory() as folder:
+        bags = list(args.bags)
+        if not bags:
+            bags = [FIXTURES / name for name in DEFAULT_BAGS]
+            bags.append(synthetic_mission(Path(folder) / "synthetic_mission.bag", args.minutes))
+        for bag in bags:
+            imp, cold, warm, messages, decoded = measure(bag, Path(folder), args.repeat)
+            ratio = imp / warm
+            ok = ratio <= TARGET
+            failed |= not ok
+            print(
+                f"  {bag.name}: {messages} messages ({bag.stat().st_size / 1e6:.1f} MB)\n"
+                f"    aeroexec import            {imp * 1000:8.1f} ms\n"
+                f"    rosbags, types built first {warm * 1000:8.1f} ms   ratio {ratio:.2f}x "
+                f"(target <= {TARGET:g}x) {'ok' if ok else 'MISSED'}\n"
+                f"    rosbags from scratch       {cold * 1000:8.1f} ms   ratio {imp / cold:.2f}x"
+                + ("" if decoded == messages else f"   ({decoded} decodable)")
+            )
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
