@@ -169,8 +169,8 @@ def test_carried_commands_are_not_reconstructed(tmp_path: Path) -> None:
     mapping = tmp_path / "map.yaml"
     mapping.write_text(
         "topics:\n"
-        "  - {topic: \"/{drone}/list_of_active_behaviors\", kind: active_behaviors}\n"
-        "  - {topic: \"/{drone}/behavior_command\", kind: activate_command}\n"
+        '  - {topic: "/{drone}/list_of_active_behaviors", kind: active_behaviors}\n'
+        '  - {topic: "/{drone}/behavior_command", kind: activate_command}\n'
     )
     report = import_bag(tmp_path / "c.bag", tmp_path / "c.mcap", mapping=mapping)
     assert summary(derived(tmp_path / "c.mcap")) == [
