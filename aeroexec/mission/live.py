@@ -28,10 +28,9 @@ from aeroexec.executive.executive import Executive
 from aeroexec.mavlink.codec import signing_key
 from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
 from aeroexec.mavlink.vehicle import FAILSAFES, Failsafe, MavlinkConfig, MavlinkVehicle
-from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionScript, load_mission, run_script
-from aeroexec.mission.session import SessionResult
+from aeroexec.mission.session import SessionResult, session_observers
 from aeroexec.vehicles.base import VehicleCommandError
 
 
@@ -115,21 +114,16 @@ def fly(
             "failsafe": config.failsafe,
             "heartbeat_timeout_s": f"{config.heartbeat_timeout:g}",
         }
-        activity = ActivityLog()
-        all_observers: list[BusObserver] = [activity, *observers]
-        if config.record is not None:
-            from aeroexec.recording import Recorder
-
-            recorder = Recorder(
-                config.record,
-                drone=config.drone,
-                metadata=metadata,
-                attachments={
-                    "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
-                    "mission.py": script.text,
-                },
-            )
-            all_observers.append(recorder)
+        activity, all_observers, recorder = session_observers(
+            config.record,
+            config.drone,
+            metadata,
+            {
+                "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
+                "mission.py": script.text,
+            },
+            observers,
+        )
         executive = Executive(
             catalog, vehicle=vehicle, clock=clock, observers=all_observers, drone=config.drone
         )

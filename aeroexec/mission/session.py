@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from aeroexec import __version__
 from aeroexec.catalog.loader import load_catalog
@@ -23,6 +24,9 @@ from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.vehicles.base import VehicleState
 from aeroexec.vehicles.sim import SimVehicle
+
+if TYPE_CHECKING:
+    from aeroexec.recording import Recorder
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,26 @@ def _build_vehicle(world_text: str, world_file: str, seed: int) -> SimVehicle:
     return SimVehicle(parse_world(world_text, world_file), seed=seed)
 
 
+def session_observers(
+    record: str | Path | None,
+    drone: str,
+    metadata: dict[str, str],
+    attachments: dict[str, str],
+    observers: Iterable[BusObserver],
+) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
+    """The observers every session has: its activity log, the caller's, and the
+    recorder when one is asked for (the caller closes it)."""
+    activity = ActivityLog()
+    everyone: list[BusObserver] = [activity, *observers]
+    recorder = None
+    if record is not None:
+        from aeroexec.recording import Recorder
+
+        recorder = Recorder(record, drone=drone, metadata=metadata, attachments=attachments)
+        everyone.append(recorder)
+    return activity, everyone, recorder
+
+
 def simulate(
     config: SessionConfig,
     observers: Iterable[BusObserver] = (),
@@ -91,23 +115,14 @@ def simulate(
         "mission": Path(script.path).name,
         "world": Path(str(config.world)).name if config.world else "default",
     }
-    activity = ActivityLog()
-    all_observers: list[BusObserver] = [activity, *observers]
-    recorder = None
-    if config.record is not None:
-        from aeroexec.recording import Recorder
-
-        recorder = Recorder(
-            config.record,
-            drone=config.drone,
-            metadata=metadata,
-            attachments={
-                "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
-                "mission.py": script.text,
-                "world.yaml": world_text,
-            },
-        )
-        all_observers.append(recorder)
+    attachments = {
+        "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
+        "mission.py": script.text,
+        "world.yaml": world_text,
+    }
+    activity, all_observers, recorder = session_observers(
+        config.record, config.drone, metadata, attachments, observers
+    )
     try:
         executive = Executive(
             catalog, vehicle=vehicle, clock=SimClock(), observers=all_observers, drone=config.drone
