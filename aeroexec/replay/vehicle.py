@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from aeroexec.executive.clock import Clock
 from aeroexec.replay.source import SourceMessage
 from aeroexec.vehicles.base import Vec3, VehicleState
+from aeroexec.vehicles.null import NullVehicle
 
 GROUNDED = VehicleState((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 1.0, False, False)
 
@@ -56,7 +57,10 @@ def decode_state(data: bytes) -> VehicleState | None:
     )
 
 
-class ReplayVehicle:
+class ReplayVehicle(NullVehicle):
+    """Shows the recorded vehicle state at the clock's time; commands change nothing
+    (the recorded flight already happened)."""
+
     kind = "replay"
 
     def __init__(self, states: Iterator[SourceMessage], clock: Clock, offset_ns: int = 0) -> None:
@@ -86,32 +90,3 @@ class ReplayVehicle:
             self._pull()
         return self._current
 
-    def step(self, dt: float) -> None:
-        pass
-
-    def take_off(self, altitude: float) -> None:
-        pass
-
-    def land(self) -> None:
-        pass
-
-    def go_to(self, x: float, y: float, z: float) -> None:
-        pass
-
-    def set_velocity(self, vx: float, vy: float, vz: float) -> None:
-        pass
-
-    def set_yaw(self, yaw: float) -> None:
-        pass
-
-    def hover(self) -> None:
-        pass
-
-    def flip(self, direction: str) -> None:
-        pass
-
-    def visible_markers(self) -> tuple[int, ...]:
-        return ()
-
-    def visible_object(self) -> Vec3 | None:
-        return None

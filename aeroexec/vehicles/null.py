@@ -7,7 +7,7 @@ simulator).
 
 from __future__ import annotations
 
-from aeroexec.vehicles.base import VehicleState
+from aeroexec.vehicles.base import Vec3, VehicleState
 
 _GROUNDED = VehicleState((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 1.0, False, False)
 
@@ -42,5 +42,11 @@ class NullVehicle:
     def hover(self) -> None:
         pass
 
+    def flip(self, direction: str) -> None:
+        pass
+
     def visible_markers(self) -> tuple[int, ...]:
         return ()
+
+    def visible_object(self) -> Vec3 | None:
+        return None
