@@ -7,7 +7,13 @@ from typing import Annotated
 import typer
 
 from aeroexec.cli.app import app, guarded
-from aeroexec.cli.replay_cmd import OutputFormat, tolerance_of
+from aeroexec.cli.replay_cmd import (
+    FormatOption,
+    OutputFormat,
+    PositionToleranceOption,
+    ToleranceOption,
+    tolerance_of,
+)
 from aeroexec.replay.engine import diff_recordings
 from aeroexec.replay.report import diff_json, diff_junit, diff_text
 
@@ -21,19 +27,9 @@ def diff(
     new: Annotated[
         str, typer.Argument(metavar="NEW", help="The recording to compare.", show_default=False)
     ],
-    output_format: Annotated[
-        OutputFormat, typer.Option("--format", help="text, json or junit (JUnit XML).")
-    ] = OutputFormat.text,
-    tolerance: Annotated[
-        float,
-        typer.Option("--tolerance", metavar="S", help="Allowed drift of end-event times (s)."),
-    ] = 0.5,
-    position_tolerance: Annotated[
-        float,
-        typer.Option(
-            "--position-tolerance", metavar="M", help="Allowed drift of the final position (m)."
-        ),
-    ] = 0.1,
+    output_format: FormatOption = OutputFormat.text,
+    tolerance: ToleranceOption = 0.5,
+    position_tolerance: PositionToleranceOption = 0.1,
 ) -> None:
     """Compare two recordings mission command by mission command: accepted/rejected and
     why, preemptions, capability and process transitions, end events and their times

@@ -27,6 +27,21 @@ class OutputFormat(str, Enum):
     junit = "junit"
 
 
+# Options `replay` and `diff` share, declared once so both read the same.
+FormatOption = Annotated[
+    OutputFormat, typer.Option("--format", help="text, json or junit (JUnit XML).")
+]
+ToleranceOption = Annotated[
+    float, typer.Option("--tolerance", metavar="S", help="Allowed drift of end-event times (s).")
+]
+PositionToleranceOption = Annotated[
+    float,
+    typer.Option(
+        "--position-tolerance", metavar="M", help="Allowed drift of the final position (m)."
+    ),
+]
+
+
 def tolerance_of(seconds: float, metres: float) -> Tolerance:
     try:
         return Tolerance(seconds, metres)
@@ -106,19 +121,9 @@ def replay(
     jobs: Annotated[
         int, typer.Option("--jobs", "-j", min=1, help="Replay this many recordings at once.")
     ] = 1,
-    output_format: Annotated[
-        OutputFormat, typer.Option("--format", help="text, json or junit (JUnit XML).")
-    ] = OutputFormat.text,
-    tolerance: Annotated[
-        float,
-        typer.Option("--tolerance", metavar="S", help="Allowed drift of end-event times (s)."),
-    ] = 0.5,
-    position_tolerance: Annotated[
-        float,
-        typer.Option(
-            "--position-tolerance", metavar="M", help="Allowed drift of the final position (m)."
-        ),
-    ] = 0.1,
+    output_format: FormatOption = OutputFormat.text,
+    tolerance: ToleranceOption = 0.5,
+    position_tolerance: PositionToleranceOption = 0.1,
 ) -> None:
     """Replay recorded missions against a new catalog or code version and report, per
     mission command, what changed: accepted/rejected, preemptions, capabilities and
