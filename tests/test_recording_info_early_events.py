@@ -23,3 +23,9 @@ def test_failed_start_is_one_run_not_two(tmp_path: Path) -> None:
     ]
     assert len(runs) == 7
     assert all(r.requested_ns is not None and r.outcome for r in runs)
+
+
+def test_record_creates_missing_directories(tmp_path: Path) -> None:
+    out = tmp_path / "out" / "nested" / "flight.mcap"
+    simulate(SessionConfig(mission=APPENDIX_C, record=out))
+    assert recording_info(out).complete

@@ -342,8 +342,10 @@ def test_close_is_idempotent_and_writing_after_close_fails(tmp_path: Path) -> No
 
 
 def test_unwritable_path_is_a_recording_error(tmp_path: Path) -> None:
+    blocker = tmp_path / "a-file"
+    blocker.write_text("not a directory")
     with pytest.raises(RecordingError) as info:
-        Recorder(tmp_path / "missing-dir" / "x.mcap")
-    assert str(info.value).startswith(str(tmp_path / "missing-dir" / "x.mcap") + ": error: ")
+        Recorder(blocker / "x.mcap")
+    assert str(info.value).startswith(str(blocker / "x.mcap") + ": error: ")
     with pytest.raises(RecordingError, match="error: cannot write"):
         Recorder(tmp_path)
