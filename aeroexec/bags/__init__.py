@@ -6,7 +6,8 @@ and let `info` and `replay` take them directly. See docs/bags.md.
 - `load_mapping(path | None)` (mapping.py): the topic mapping (default: Aerostack's names);
 - `open_bag(path)` (bagfile.py): a checked, streaming reader; `is_bag(path)`;
 - `bag_info(path)` (info.py): what `aeroexec info BAG` prints;
-- `replayable(path)` (anyfile.py): an MCAP path for a recording or a bag;
+- `bag_recording(path)` (replay.py): a bag imported to a temporary recording, for the
+  replay engine (which calls `replay_bag` for `.bag` inputs);
 - `aerostack_typestore()` (types.py): rosbags' Noetic store plus Aerostack's types.
 """
 

@@ -1,8 +1,9 @@
 """`import_bag`: a ROS 1 bag to an aeroexec-profile MCAP file, losing nothing.
 
 Every message of every connection is copied byte for byte to a raw `ros1` channel
-(`sink.py`); only the messages of mapped topics are decoded, to derive the aeroexec
-channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
+(`sink.py`); only messages of mapped topics are decoded, and only those used (a pose
+when it gives a vehicle state, the latest velocity/battery/status before it), to derive
+the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
 and coordinator calls (`reconstruct.py`), `list_of_active_capabilities`, `beliefs`,
 `process_state`, `vehicle/state` (+ `vehicle/pose`). Log times are the bag's. Messages are
 written in bag time order: reconstruction decides an input only when the 2 x grace

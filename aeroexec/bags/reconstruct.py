@@ -47,8 +47,8 @@ LIST = "list_of_active_behaviors"
 #: Event details as aeroexec's coordinator writes them.
 PREEMPTED_BY = "preempted by {}"
 INHIBITED = "inhibited"
-#: An end event this long after its behavior was reconstructed as inhibited still
-#: belongs to that activation (in grace units).
+#: An end event this long after its behavior was reconstructed as inhibited is that
+#: activation's real end (in grace units): counted, kept raw only, no second end event.
 LATE_EVENT_GRACES = 4
 
 
