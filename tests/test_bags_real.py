@@ -125,6 +125,7 @@ def test_the_import_is_an_aeroexec_recording_with_bag_metadata(imported: dict[st
     assert meta["vehicle"] == "ros1-bag"
     assert meta["source"] == AEROSTACK_BAG.name
     assert meta["drone"] == "drone1"
+    assert meta["mapped_kinds"] == "battery,flight_status,pose,process_state,velocity"
     bag = recording.metadata["ros1_bag"]
     assert bag["compression"] == "none"
     assert bag["chunks"] == "4"

@@ -418,7 +418,9 @@ class _Import:
         return notes
 
 
-def _metadata(bag: BagFile, mapping: Mapping, drone: str) -> dict[str, dict[str, str]]:
+def _metadata(
+    bag: BagFile, mapping: Mapping, drone: str, mapped: dict[str, str]
+) -> dict[str, dict[str, str]]:
     return {
         METADATA_NAME: {
             "aeroexec_version": __version__,
@@ -429,6 +431,9 @@ def _metadata(bag: BagFile, mapping: Mapping, drone: str) -> dict[str, dict[str,
             "mapping": mapping.source,
             "grace_s": f"{mapping.grace_ns / _NS:g}",
             "state_period_s": f"{mapping.state_period_ns / _NS:g}",
+            # which kinds the bag had: a reader can tell "no capability changes" from
+            # "no capability list in the bag"
+            "mapped_kinds": ",".join(sorted(mapped)),
         },
         BAG_METADATA: {
             "file": Path(bag.name).name,
@@ -479,7 +484,7 @@ def import_bag(
                 sink = ImportSink(stream, drone, compression)
                 run = _Import(bag, mapping, drone, sink)
                 sink.start(
-                    _metadata(bag, mapping, drone),
+                    _metadata(bag, mapping, drone, run.mapped),
                     {MAPPING_ATTACHMENT: mapping.text.encode("utf-8")},
                 )
                 run.run()
