@@ -177,3 +177,18 @@ def test_cli_replay_of_a_bag_without_behavior_topics(tmp_path: Path) -> None:
     assert code == 2
     assert err.startswith(f"{TURTLE_BZ2}: error: no behavior commands to replay")
     assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_a_bag_without_resource_topics_compares_what_it_has(folder: Path) -> None:
+    """Most bags carry no capability lists or process heartbeats: the replayed
+    executive's transitions must not show up as differences, and the report says what
+    was not compared."""
+    path = short_mission(resources=False).write(folder / "no_resources.bag")
+    result = replay(path, THESIS_CATALOG)
+    assert found(result) == []
+    notes = result.diff.notes if result.diff else ()
+    assert any("no capabilities transitions: capabilities not compared" in n for n in notes)
+    assert any("no processes transitions: processes not compared" in n for n in notes)
+    # what the bag does hold is still compared
+    changed = replay(path, edited(folder, "short_timeout"))
+    assert [kind for _, kind, _ in found(changed)] != []

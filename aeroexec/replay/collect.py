@@ -159,6 +159,7 @@ class OutcomeBuilder:
 
     def __init__(self, horizon_ns: int | None = None) -> None:
         self.horizon_ns = horizon_ns
+        self._observed: set[str] = set()
         #: Each command's summary: frozen as soon as it is final, so it exists once.
         self.commands: list[_Command | CommandOutcome] = []
         self._current: _Command | None = None
@@ -221,10 +222,12 @@ class OutcomeBuilder:
         elif name == "behavior_event":
             self._event(data, time_ns)
         elif name == "process_state":
+            self._observed.add("processes")
             up = data.get("state") == "started"
             transition = self._transition(str(data.get("process", "")), up)
             self._window(self._initial_processes, "processes").append(transition)
         elif name == "list_of_active_capabilities":
+            self._observed.add("capabilities")
             self._capability_snapshot(data)
 
     def vehicle_state(self, data: Any, time_ns: int) -> None:
@@ -260,6 +263,7 @@ class OutcomeBuilder:
             problem=problem,
             metadata=dict(metadata or {}),
             notes=notes,
+            observed=frozenset(self._observed),
         )
 
     # -- internals ---------------------------------------------------------------------

@@ -127,7 +127,8 @@ def diff_outcomes(
     tol = tolerance or Tolerance()
     names = (base_name or base.source, new_name or new.source)
     out: list[Difference] = []
-    _initialization(base, new, out)
+    compared = base.observed & new.observed
+    _initialization(base, new, out, compared)
     matched = 0
     a = [c.key for c in base.commands]
     b = [c.key for c in new.commands]
@@ -135,7 +136,7 @@ def diff_outcomes(
         if tag == "equal":
             for old, cur in zip(base.commands[i1:i2], new.commands[j1:j2], strict=True):
                 matched += 1
-                out.extend(_command(old, cur, tol))
+                out.extend(_command(old, cur, tol, compared))
             continue
         for old in base.commands[i1:i2]:
             out.append(_only(old, "only_in_base", names[0], base_index=old.index))
@@ -146,6 +147,9 @@ def diff_outcomes(
         if state is not None:
             out.append(state)
     all_notes = list(notes)
+    for kind in sorted((base.observed | new.observed) - compared):
+        missing = base if kind not in base.observed else new
+        all_notes.append(f"{missing.source} records no {kind} transitions: {kind} not compared")
     for run in (base, new):
         all_notes.extend(f"{run.source}: {note}" for note in run.notes)
     return DiffResult(names[0], names[1], tuple(out), matched, tol, tuple(all_notes))
@@ -170,7 +174,9 @@ def align(
 
 
 # -- one command ----------------------------------------------------------------------------
-def _command(old: CommandOutcome, cur: CommandOutcome, tol: Tolerance) -> list[Difference]:
+def _command(
+    old: CommandOutcome, cur: CommandOutcome, tol: Tolerance, compared: frozenset[str]
+) -> list[Difference]:
     out: list[Difference] = []
     label = old.label
 
@@ -206,12 +212,14 @@ def _command(old: CommandOutcome, cur: CommandOutcome, tol: Tolerance) -> list[D
     end = _end(old, cur, tol)
     if end is not None:
         add(*end)
-    capabilities = _transitions(old.capabilities, cur.capabilities, ("activates", "releases"))
-    if capabilities:
-        add("capabilities", f"capabilities: {capabilities}")
-    processes = _transitions(old.processes, cur.processes, ("starts", "stops"))
-    if processes:
-        add("processes", f"processes: {processes}")
+    if "capabilities" in compared:
+        capabilities = _transitions(old.capabilities, cur.capabilities, ("activates", "releases"))
+        if capabilities:
+            add("capabilities", f"capabilities: {capabilities}")
+    if "processes" in compared:
+        processes = _transitions(old.processes, cur.processes, ("starts", "stops"))
+        if processes:
+            add("processes", f"processes: {processes}")
     return out
 
 
@@ -300,14 +308,17 @@ def _transitions(
 
 
 # -- run level ------------------------------------------------------------------------------
-def _initialization(base: RunOutcome, new: RunOutcome, out: list[Difference]) -> None:
-    for field, verbs in (
-        ("initial_capabilities", ("activates", "releases")),
-        ("initial_processes", ("starts", "stops")),
+def _initialization(
+    base: RunOutcome, new: RunOutcome, out: list[Difference], compared: frozenset[str]
+) -> None:
+    for what, field, verbs in (
+        ("capabilities", "initial_capabilities", ("activates", "releases")),
+        ("processes", "initial_processes", ("starts", "stops")),
     ):
+        if what not in compared:
+            continue
         text = _transitions(getattr(base, field), getattr(new, field), verbs)
         if text:
-            what = "capabilities" if field == "initial_capabilities" else "processes"
             out.append(Difference("initialization", f"initialization {what}: {text}"))
 
 

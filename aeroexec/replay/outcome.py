@@ -120,6 +120,9 @@ class RunOutcome:
     problem: str | None = None
     metadata: dict[str, str] = field(default_factory=dict)
     notes: tuple[str, ...] = ()
+    #: Which transitions the run recorded at all ("capabilities", "processes"): a ROS bag
+    #: may carry neither, and what was not recorded cannot be compared.
+    observed: frozenset[str] = frozenset({"capabilities", "processes"})
 
     @property
     def duration_s(self) -> float:

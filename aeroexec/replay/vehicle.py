@@ -89,4 +89,3 @@ class ReplayVehicle(NullVehicle):
             self._current = self._next[1]
             self._pull()
         return self._current
-
