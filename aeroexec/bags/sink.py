@@ -20,8 +20,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import IO, Any
 
+from mcap.writer import CompressionType, Writer
+
 from aeroexec.bags.bagfile import BagConnection
-from aeroexec.bags.mcapwriter import BulkMcapWriter
 from aeroexec.recording.schemas import (
     MESSAGE_ENCODING,
     PROFILE,
@@ -35,7 +36,12 @@ from aeroexec.recording.writer import LIBRARY, METADATA_NAME, encode_json
 RAW_PREFIX = "/ros1"
 RAW_SCHEMA_ENCODING = "ros1msg"
 RAW_MESSAGE_ENCODING = "ros1"
-COMPRESSIONS = ("lz4", "zstd", "none")
+_COMPRESSION_TYPES = {
+    "lz4": CompressionType.LZ4,
+    "zstd": CompressionType.ZSTD,
+    "none": CompressionType.NONE,
+}
+COMPRESSIONS = tuple(_COMPRESSION_TYPES)
 CHUNK_SIZE = 1024 * 1024
 
 
@@ -45,7 +51,11 @@ def raw_topic(topic: str) -> str:
 
 class ImportSink:
     def __init__(self, stream: IO[bytes], drone: str, compression: str = "lz4") -> None:
-        self._writer = BulkMcapWriter(stream, compression=compression, chunk_size=CHUNK_SIZE)
+        if compression not in COMPRESSIONS:
+            raise ValueError(f"compression must be one of {COMPRESSIONS}")
+        self._writer = Writer(
+            stream, chunk_size=CHUNK_SIZE, compression=_COMPRESSION_TYPES[compression]
+        )
         self._prefix = f"/{drone}/"
         self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._raw: dict[int, int] = {}  # bag connection id -> channel id
@@ -63,7 +73,8 @@ class ImportSink:
         for name, values in metadata.items():
             self._writer.add_metadata(name, dict(values))
         for name, data in attachments.items():
-            self._writer.add_attachment(name, "application/yaml", data)
+            # create/log time 0: the same bag must give the same bytes.
+            self._writer.add_attachment(0, 0, name, "application/yaml", data)
 
     # -- channels ----------------------------------------------------------------------------
     def _schema(self, name: str, encoding: str, data: bytes) -> int:
