@@ -8,7 +8,7 @@ import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
-from aeroexec.cli.run_cmd import print_row, print_summary
+from aeroexec.cli.run_cmd import finish, print_row, print_summary
 from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL
 from aeroexec.mavlink.vehicle import MavlinkVehicle
 from aeroexec.mission.activity import ActivityLog
@@ -96,10 +96,4 @@ def fly_command(
         raise typer.Exit(130) from None
     print_summary(result, clock="flown")
     typer.echo(f"mavlink: {result.metadata.get('link_summary', '')}")
-    if result.recording:
-        typer.echo(f"recorded to {result.recording}")
-    if not result.outcome.returned:
-        if debug and result.outcome.traceback:
-            typer.echo(result.outcome.traceback, err=True)
-        error_line(f"mission failed: {result.outcome.error}")
-        raise typer.Exit(1)
+    finish(result, debug)

@@ -87,6 +87,11 @@ def run(
     printer = [] if quiet else [ActivityLog(on_change=print_row)]
     result = simulate(config, observers=printer)
     print_summary(result)
+    finish(result, debug)
+
+
+def finish(result: SessionResult, debug: bool) -> None:
+    """Say where the recording is, and exit 1 (with the reason) if the mission raised."""
     if result.recording:
         typer.echo(f"recorded to {result.recording}")
     if not result.outcome.returned:
