@@ -34,7 +34,9 @@ def _connected(vehicle: MavlinkVehicle) -> None:
 @app.command("fly")
 @guarded
 def fly_command(
-    mission: Path = typer.Argument(..., help="Mission script (Python, defines runMission())."),
+    mission: Path = typer.Argument(
+        ..., metavar="MISSION", help="Mission script (Python, defines runMission())."
+    ),
     connect: str = typer.Option(
         DEFAULT_GCS_URL, "--connect", help="MAVLink endpoint: udpin:HOST:PORT or udpout:HOST:PORT."
     ),

@@ -60,7 +60,9 @@ def print_summary(result: SessionResult, clock: str = "simulated") -> None:
 @app.command()
 @guarded
 def run(
-    mission: Path = typer.Argument(..., help="Mission script (Python, defines runMission())."),
+    mission: Path = typer.Argument(
+        ..., metavar="MISSION", help="Mission script (Python, defines runMission())."
+    ),
     catalog: Path = typer.Option(
         DEFAULT_CATALOG, "--catalog", "-c", help="Behavior catalog (YAML)."
     ),
