@@ -3,7 +3,7 @@ named twice."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Container, Iterator, Sequence
 
 from aeroexec.catalog.model import Severity
 from aeroexec.errors import Mark
@@ -43,6 +43,23 @@ def _what_else(graphs: CatalogGraphs, name: str, expected: str) -> str:
     return f"it is a {kind}, not a {expected}" if kind else ""
 
 
+def _dangling(
+    definitions: Sequence[Definition], field: str, defined: Container[str]
+) -> Iterator[tuple[Definition, int, str]]:
+    """(definition, index, name) for each name in the entries' `field` that is not in
+    `defined`: the one loop every undefined-reference rule walks."""
+    for definition in definitions:
+        for index, name in enumerate(getattr(definition.item, field)):
+            if name not in defined:
+                yield definition, index, name
+
+
+def _capability_detail(graphs: CatalogGraphs, name: str) -> str:
+    """' (it is a list, not a capability)' or a did-you-mean for an undefined capability."""
+    other = _what_else(graphs, name, "capability")
+    return f" ({other})" if other else graphs.capability_names.hint(name)
+
+
 @catalog_rule(
     "AX201",
     "undefined-list",
@@ -55,22 +72,19 @@ def _what_else(graphs: CatalogGraphs, name: str, expected: str) -> str:
     define the list.""",
 )
 def undefined_list(graphs: CatalogGraphs) -> Iterator[Finding]:
-    lists = graphs.catalog.lists
-    for definition in graphs.behavior_defs:
+    dangling = _dangling(graphs.behavior_defs, "incompatible_lists", graphs.catalog.lists)
+    for definition, index, name in dangling:
         behavior = definition.item
-        for index, name in enumerate(behavior.incompatible_lists):
-            if name in lists:
-                continue
-            other = _what_else(graphs, name, "list")
-            detail = f"; {other}" if other else graphs.list_names.hint(name)
-            yield graphs.finding(
-                "AX201",
-                E,
-                f"{behavior.name}: incompatible list '{name}' is not defined{detail}; "
-                f"{behavior.name} preempts nothing through it{_replaced(definition, 'behavior')}",
-                behavior.mark_of(f"incompatible_lists.{index}"),
-                (behavior.name, name),
-            )
+        other = _what_else(graphs, name, "list")
+        detail = f"; {other}" if other else graphs.list_names.hint(name)
+        yield graphs.finding(
+            "AX201",
+            E,
+            f"{behavior.name}: incompatible list '{name}' is not defined{detail}; "
+            f"{behavior.name} preempts nothing through it{_replaced(definition, 'behavior')}",
+            behavior.mark_of(f"incompatible_lists.{index}"),
+            (behavior.name, name),
+        )
 
 
 @catalog_rule(
@@ -84,25 +98,23 @@ def undefined_list(graphs: CatalogGraphs) -> Iterator[Finding]:
     real one running). Fix: name the behavior as it is defined, or remove the entry.""",
 )
 def list_member_not_a_behavior(graphs: CatalogGraphs) -> Iterator[Finding]:
-    behaviors = graphs.catalog.behaviors
-    for definition in graphs.list_defs:
+    for definition, index, member in _dangling(
+        graphs.list_defs, "behaviors", graphs.catalog.behaviors
+    ):
         lst = definition.item
-        for index, member in enumerate(lst.behaviors):
-            if member in behaviors:
-                continue
-            kind = _kind_of(graphs, member, "behavior")
-            if kind:
-                message = f"list {lst.name}: {member} is a {kind}, not a behavior"
-            else:
-                hint = graphs.behavior_names.hint(member)
-                message = f"list {lst.name}: {member} is not a defined behavior{hint}"
-            yield graphs.finding(
-                "AX202",
-                E,
-                message + _replaced(definition, "list"),
-                lst.mark_of(f"behaviors.{index}"),
-                (lst.name, member),
-            )
+        kind = _kind_of(graphs, member, "behavior")
+        if kind:
+            message = f"list {lst.name}: {member} is a {kind}, not a behavior"
+        else:
+            hint = graphs.behavior_names.hint(member)
+            message = f"list {lst.name}: {member} is not a defined behavior{hint}"
+        yield graphs.finding(
+            "AX202",
+            E,
+            message + _replaced(definition, "list"),
+            lst.mark_of(f"behaviors.{index}"),
+            (lst.name, member),
+        )
 
 
 @catalog_rule(
@@ -116,26 +128,22 @@ def list_member_not_a_behavior(graphs: CatalogGraphs) -> Iterator[Finding]:
     witness=True,
 )
 def undefined_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
-    capabilities = graphs.catalog.capabilities
-    for definition in graphs.behavior_defs:
+    dangling = _dangling(graphs.behavior_defs, "capabilities", graphs.catalog.capabilities)
+    for definition, index, name in dangling:
         behavior = definition.item
-        for index, name in enumerate(behavior.capabilities):
-            if name in capabilities:
-                continue
-            other = _what_else(graphs, name, "capability")
-            detail = f" ({other})" if other else graphs.capability_names.hint(name)
-            witness = None
-            if definition.effective:
-                witness = rejection_witness(graphs.model, (behavior.name,), behavior.name)
-            yield graphs.finding(
-                "AX203",
-                E,
-                f"{behavior.name}: capability '{name}' is not defined{detail}: every "
-                f"activation of {behavior.name} is rejected{_replaced(definition, 'behavior')}",
-                behavior.mark_of(f"capabilities.{index}"),
-                (behavior.name, name),
-                witness,
-            )
+        detail = _capability_detail(graphs, name)
+        witness = None
+        if definition.effective:
+            witness = rejection_witness(graphs.model, (behavior.name,), behavior.name)
+        yield graphs.finding(
+            "AX203",
+            E,
+            f"{behavior.name}: capability '{name}' is not defined{detail}: every "
+            f"activation of {behavior.name} is rejected{_replaced(definition, 'behavior')}",
+            behavior.mark_of(f"capabilities.{index}"),
+            (behavior.name, name),
+            witness,
+        )
 
 
 @catalog_rule(
@@ -149,22 +157,19 @@ def undefined_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
     used. Fix: correct the name or remove the entry.""",
 )
 def undefined_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
-    capabilities = graphs.catalog.capabilities
-    for definition in graphs.capability_defs:
+    for definition, index, name in _dangling(
+        graphs.capability_defs, "incompatible_capabilities", graphs.catalog.capabilities
+    ):
         spec = definition.item
-        for index, name in enumerate(spec.incompatible_capabilities):
-            if name in capabilities:
-                continue
-            other = _what_else(graphs, name, "capability")
-            detail = f" ({other})" if other else graphs.capability_names.hint(name)
-            yield graphs.finding(
-                "AX204",
-                W,
-                f"capability {spec.name}: incompatible capability '{name}' is not "
-                f"defined{detail}; the conflict it declares is never checked",
-                spec.mark_of(f"incompatible_capabilities.{index}"),
-                (spec.name, name),
-            )
+        yield graphs.finding(
+            "AX204",
+            W,
+            f"capability {spec.name}: incompatible capability '{name}' is not "
+            f"defined{_capability_detail(graphs, name)}; the conflict it declares is never "
+            "checked",
+            spec.mark_of(f"incompatible_capabilities.{index}"),
+            (spec.name, name),
+        )
 
 
 @catalog_rule(
@@ -179,31 +184,27 @@ def undefined_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding
     witness=True,
 )
 def undefined_required_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
-    capabilities = graphs.catalog.capabilities
     users = _users_by_capability(graphs)
-    for definition in graphs.capability_defs:
+    for definition, index, name in _dangling(
+        graphs.capability_defs, "required_capabilities", graphs.catalog.capabilities
+    ):
         spec = definition.item
-        for index, name in enumerate(spec.required_capabilities):
-            if name in capabilities:
-                continue
-            other = _what_else(graphs, name, "capability")
-            detail = f" ({other})" if other else graphs.capability_names.hint(name)
-            affected = users.get(spec.name, ()) if definition.effective else ()
-            witness = None
-            if affected:
-                consequence = f"; behaviors using it are rejected: {', '.join(affected)}"
-                witness = rejection_witness(graphs.model, affected[:1], affected[0])
-            else:
-                consequence = "; no behavior uses it yet"
-            yield graphs.finding(
-                "AX205",
-                E,
-                f"capability {spec.name} requires '{name}', which is not defined"
-                f"{detail}{consequence}",
-                spec.mark_of(f"required_capabilities.{index}"),
-                (spec.name, name, *affected),
-                witness,
-            )
+        affected = users.get(spec.name, ()) if definition.effective else ()
+        witness = None
+        if affected:
+            consequence = f"; behaviors using it are rejected: {', '.join(affected)}"
+            witness = rejection_witness(graphs.model, affected[:1], affected[0])
+        else:
+            consequence = "; no behavior uses it yet"
+        yield graphs.finding(
+            "AX205",
+            E,
+            f"capability {spec.name} requires '{name}', which is not defined"
+            f"{_capability_detail(graphs, name)}{consequence}",
+            spec.mark_of(f"required_capabilities.{index}"),
+            (spec.name, name, *affected),
+            witness,
+        )
 
 
 def _users_by_capability(graphs: CatalogGraphs) -> dict[str, tuple[str, ...]]:
