@@ -21,11 +21,10 @@ from pathlib import Path
 
 from aeroexec import __version__
 from aeroexec.catalog.model import Catalog
-from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.script import compile_mission
-from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.mission.session import SessionConfig, session_observers, simulate
 from aeroexec.replay.collect import OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -124,29 +123,21 @@ def _replay_commands(
     # The simulation starts when the recording does (a live log's clock need not be 0).
     offset = run.outcome.start_ns or 0
     observer.offset_ns = offset
-    observers: list[BusObserver] = [observer]
-    recorder = None
-    if output is not None:
-        from aeroexec.recording import Recorder
-
-        recorder = Recorder(
-            output,
-            drone=drone,
-            metadata={
-                "aeroexec_version": __version__,
-                "seed": str(seed),
-                "clock": "sim",
-                "vehicle": vehicle.kind,
-                "drone": drone,
-                "catalog": catalog.name,
-                "mission": "(mission/command stream)",
-                "world": world[1],
-                "replay_of": Path(run.outcome.source).name,
-                "time_offset_ns": str(offset),
-            },
-            attachments={"catalog.yaml": catalog.text, "world.yaml": world[0]},
-        )
-        observers.append(recorder)
+    metadata = {
+        "aeroexec_version": __version__,
+        "seed": str(seed),
+        "clock": "sim",
+        "vehicle": vehicle.kind,
+        "drone": drone,
+        "catalog": catalog.name,
+        "mission": "(mission/command stream)",
+        "world": world[1],
+        "replay_of": Path(run.outcome.source).name,
+        "time_offset_ns": str(offset),
+    }
+    _, observers, recorder = session_observers(
+        output, drone, metadata, {"catalog.yaml": catalog.text, "world.yaml": world[0]}, [observer]
+    )
     try:
         executive = Executive(
             catalog.catalog,

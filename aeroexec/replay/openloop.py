@@ -14,9 +14,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from aeroexec import __version__
-from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
+from aeroexec.mission.session import session_observers
 from aeroexec.replay.closedloop import ChosenCatalog
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
@@ -43,28 +43,24 @@ def replay_open(
     vehicle = ReplayVehicle(states, clock, offset)
     script = Script()
     builder = OutcomeBuilder(horizon_ns)
-    observers: list[BusObserver] = [OutcomeObserver(builder, offset_ns=offset)]
-    recorder = None
-    if output is not None:
-        from aeroexec.recording import Recorder
-
-        recorder = Recorder(
-            output,
-            drone=drone,
-            metadata={
-                "aeroexec_version": __version__,
-                "clock": "replay",
-                "vehicle": vehicle.kind,
-                "drone": drone,
-                "catalog": catalog.name,
-                "mission": "(mission/command stream)",
-                "replay_of": Path(recorded.source).name,
-                "replay_mode": "open",
-                "time_offset_ns": str(offset),
-            },
-            attachments={"catalog.yaml": catalog.text},
-        )
-        observers.append(recorder)
+    metadata = {
+        "aeroexec_version": __version__,
+        "clock": "replay",
+        "vehicle": vehicle.kind,
+        "drone": drone,
+        "catalog": catalog.name,
+        "mission": "(mission/command stream)",
+        "replay_of": Path(recorded.source).name,
+        "replay_mode": "open",
+        "time_offset_ns": str(offset),
+    }
+    _, observers, recorder = session_observers(
+        output,
+        drone,
+        metadata,
+        {"catalog.yaml": catalog.text},
+        [OutcomeObserver(builder, offset_ns=offset)],
+    )
     try:
         executive = Executive(
             catalog.catalog,
