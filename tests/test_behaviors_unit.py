@@ -430,7 +430,7 @@ class Changes:
 def test_feed_adds_the_vehicle_beliefs_once() -> None:
     changes = Changes()
     beliefs = Beliefs(changes)
-    assert update_beliefs(beliefs, vehicle_state(), ()) == 5
+    assert update_beliefs(beliefs, vehicle_state()) == 5
     assert sorted(beliefs.texts()) == [
         "battery_charge(self, 80)",
         "battery_level(self, HIGH)",
@@ -439,7 +439,7 @@ def test_feed_adds_the_vehicle_beliefs_once() -> None:
         "yaw(self, 0)",
     ]
     changes.log.clear()
-    assert update_beliefs(beliefs, vehicle_state(), (1, 2)) == 0
+    assert update_beliefs(beliefs, vehicle_state()) == 0
     assert changes.log == []
     assert not beliefs.holds("visual_marker(?)")  # markers are PAY_ATTENTION's job
 

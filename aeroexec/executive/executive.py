@@ -59,6 +59,10 @@ class Executive:
             self.bus.attach(observer)
         self.vehicle: Vehicle = vehicle if vehicle is not None else _default_vehicle()
         self.beliefs = Beliefs(self._belief_changed)
+        # Bound once: the feed runs every tick.
+        from aeroexec.vehicles.beliefs_feed import update_beliefs
+
+        self._update_beliefs = update_beliefs
         self.events: list[BehaviorEvent] = []
         self._event_listeners: list[Callable[[BehaviorEvent], None]] = []
         self.specialist = BehaviorSpecialist(catalog, self.bus)
@@ -145,9 +149,7 @@ class Executive:
         self.bus.publish("beliefs", lambda: {"op": op, "belief": belief})
 
     def _feed_beliefs(self) -> None:
-        from aeroexec.vehicles.beliefs_feed import update_beliefs
-
-        update_beliefs(self.beliefs, self.vehicle.state(), self.vehicle.visible_markers())
+        self._update_beliefs(self.beliefs, self.vehicle.state())
 
     def _vehicle_state(self) -> dict[str, Any]:
         state = self.vehicle.state()

@@ -15,7 +15,6 @@ Visual markers are not fed here: PAY_ATTENTION_TO_VISUAL_MARKERS adds those.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
 
 from aeroexec.executive.beliefs import Beliefs, Compound
 from aeroexec.vehicles.base import VehicleState
@@ -51,13 +50,12 @@ def heading_degrees(yaw: float) -> int:
     return 180 if degrees == -180 else degrees
 
 
-def update_beliefs(beliefs: Beliefs, state: VehicleState, markers_seen: Iterable[int] = ()) -> int:
+def update_beliefs(beliefs: Beliefs, state: VehicleState) -> int:
     """Bring the vehicle beliefs up to date; returns how many beliefs changed.
 
-    `markers_seen` is accepted so the executive can hand over everything it polled in one
-    call, but marker beliefs are PAY_ATTENTION_TO_VISUAL_MARKERS' job, so it is unused.
+    Marker beliefs are not fed here: seeing markers is PAY_ATTENTION_TO_VISUAL_MARKERS'
+    job (a mission that does not pay attention must not learn of them).
     """
-    del markers_seen
     changes = 0
     changes += beliefs.add(_FLIGHT_STATES[state.flying])
     if state.flying:
