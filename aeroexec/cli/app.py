@@ -15,6 +15,7 @@ import typer
 
 from aeroexec import __version__
 from aeroexec.errors import AeroexecError
+from aeroexec.interrupts import Interrupted, signals_as_interrupts
 
 app = typer.Typer(
     name="aeroexec",
@@ -55,12 +56,18 @@ def error_line(message: str) -> None:
 
 
 def guarded(func: F) -> F:
-    """Turn aeroexec's input errors into one stderr line and exit code 2 (no traceback)."""
+    """Turn aeroexec's input errors into one stderr line and exit code 2 (no traceback),
+    and SIGINT/SIGTERM/SIGHUP into a clean stop: the command's `finally` blocks finish
+    or remove its output, then one line and exit code 128 + signal."""
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
-            return func(*args, **kwargs)
+            with signals_as_interrupts():
+                return func(*args, **kwargs)
+        except Interrupted as exc:
+            error_line(f"aeroexec: {exc.line()}")
+            raise typer.Exit(exc.exit_code) from None
         except AeroexecError as exc:
             text = str(exc)
             if exc.mark is None:

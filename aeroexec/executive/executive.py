@@ -24,6 +24,7 @@ from aeroexec.executive.coordinator import BehaviorCoordinator
 from aeroexec.executive.messages import BehaviorEvent, ServiceResult
 from aeroexec.executive.resources import ResourceManager
 from aeroexec.executive.specialist import SPECIALIST, BehaviorSpecialist
+from aeroexec.interrupts import check as check_interrupts
 from aeroexec.vehicles.base import Vehicle
 
 Library = Mapping[str, type[Behavior]]
@@ -109,6 +110,8 @@ class Executive:
 
     # -- time ----------------------------------------------------------------------------
     def step(self) -> None:
+        # A tick boundary is a safe point: nothing is half-published or half-recorded.
+        check_interrupts()
         self.clock.advance()
         self.vehicle.step(self.clock.tick_ns / NS_PER_S)
         self._feed_beliefs()
