@@ -18,7 +18,7 @@ from aeroexec.catalog import read_catalog
 from aeroexec.catalog.loader import parse_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.errors import CatalogError
-from aeroexec.executive import Executive
+from aeroexec.executive import Executive, GenericBehavior
 from aeroexec.verifier import Finding, Outcome, Witness, check_catalog
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
@@ -33,7 +33,7 @@ def replay(catalog: Catalog, witness: Witness) -> Executive:
     implementation (`library={}`): a library behavior's own situation check (LAND
     needs the drone flying) is not what the verifier predicts.
     """
-    executive = Executive(catalog, library={})
+    executive = Executive(catalog, library={}, stand_in=GenericBehavior)
     if witness.outcome is Outcome.INITIATION_FAILS:
         assert witness.steps == ()
         assert not executive.initiation.ok, "initiation was expected to fail"
@@ -110,20 +110,24 @@ def test_witness_json_shape() -> None:
 
 def test_repaired_catalog_accepts_the_same_steps() -> None:
     """The AX304 witness against its clean near-miss: FOLLOW preempts GO_TO cleanly."""
-    executive = Executive(read_catalog(RULES / "AX304.clean.yaml"), library={})
+    executive = Executive(
+        read_catalog(RULES / "AX304.clean.yaml"), library={}, stand_in=GenericBehavior
+    )
     assert executive.activate_behavior("GO_TO").ok
     assert executive.activate_behavior("FOLLOW").ok
     assert executive.active_behaviors == ("FOLLOW",)
 
 
 def test_repaired_defaults_initiate() -> None:
-    assert Executive(read_catalog(RULES / "AX302.clean.yaml"), library={}).initiation.ok
+    assert Executive(
+        read_catalog(RULES / "AX302.clean.yaml"), library={}, stand_in=GenericBehavior
+    ).initiation.ok
 
 
 def test_asymmetric_witness_order_matters() -> None:
     """AX401's witness leaves both running; the opposite order preempts."""
     catalog = read_catalog(RULES / "AX401.yaml")
-    executive = Executive(catalog, library={})
+    executive = Executive(catalog, library={}, stand_in=GenericBehavior)
     assert executive.activate_behavior("GO_TO").ok
     assert executive.activate_behavior("DOCK").ok
     assert "GO_TO" not in executive.active_behaviors
