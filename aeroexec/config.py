@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from aeroexec.display import shown
 from aeroexec.errors import ConfigError, Mark
 
 if sys.version_info >= (3, 11):
@@ -103,9 +104,9 @@ def _read(path: Path) -> dict[str, Any]:
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise ConfigError(f"not UTF-8 text (byte {exc.start})", Mark(str(path))) from None
+        raise ConfigError(f"not UTF-8 text (byte {exc.start})", Mark(shown(path))) from None
     except OSError as exc:
-        raise ConfigError(f"cannot read: {exc.strerror or exc}", Mark(str(path))) from None
+        raise ConfigError(f"cannot read: {exc.strerror or exc}", Mark(shown(path))) from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -116,7 +117,7 @@ def _read(path: Path) -> dict[str, Any]:
         if found is not None:
             message = message[: found.start()]
             line, column = int(found[1]), int(found[2])
-        mark = Mark(str(path), line or 0, column or 0)
+        mark = Mark(shown(path), line or 0, column or 0)
         raise ConfigError(f"invalid TOML: {message}", mark) from None
 
 
@@ -205,22 +206,22 @@ def key_mark(path: Path, key: str | None) -> Mark:
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError):
-        return Mark(str(path))
+        return Mark(shown(path))
     start = 0
     if path.name == PYPROJECT:
         header = re.compile(r"^\s*\[\s*tool\s*\.\s*aeroexec\s*\]")
         start = next((i for i, line in enumerate(lines) if header.match(line)), -1)
         if start < 0:
-            return Mark(str(path))
+            return Mark(shown(path))
         if key is None:
-            return Mark(str(path), start + 1, 1)
+            return Mark(shown(path), start + 1, 1)
         start += 1
     if key is None:
-        return Mark(str(path))
+        return Mark(shown(path))
     pattern = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*=")
     for i in range(start, len(lines)):
         if lines[i].lstrip().startswith("[") and i > start:
             break
         if pattern.match(lines[i]):
-            return Mark(str(path), i + 1, lines[i].index(lines[i].lstrip()[0]) + 1)
-    return Mark(str(path), start if start else 0, 1 if start else 0)
+            return Mark(shown(path), i + 1, lines[i].index(lines[i].lstrip()[0]) + 1)
+    return Mark(shown(path), start if start else 0, 1 if start else 0)

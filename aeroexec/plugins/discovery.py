@@ -26,9 +26,10 @@ from types import ModuleType
 
 from aeroexec.catalog.model import Catalog
 from aeroexec.config import key_mark
+from aeroexec.display import shown
 from aeroexec.errors import BehaviorError, Mark
 from aeroexec.executive.behavior import Behavior, GenericBehavior
-from aeroexec.plugins.loading import Importer, class_mark, failure_in_user_code, shown
+from aeroexec.plugins.loading import Importer, Named, class_mark, failure_in_user_code
 
 ENTRY_POINT_GROUP = "aeroexec.behaviors"
 STANDARD = "standard library"
@@ -185,7 +186,7 @@ def discover(sources: BehaviorSources) -> BehaviorSet:
     declared = bool(sources.command_line) or sources.config is not None
     root = Path(sources.command_line_root)
     for spec in sources.command_line:
-        module = importer.load(spec, root, Mark(f"{COMMAND_LINE} {spec}"))
+        module = importer.load(spec, root, Named(f"{COMMAND_LINE} {spec}"))
         for cls in behaviors_in(module):
             collector.add(cls, COMMAND_LINE, spec)
     if sources.command_line:
@@ -194,7 +195,9 @@ def discover(sources: BehaviorSources) -> BehaviorSet:
         config_file = Path(sources.config_file)
         named_at = key_mark(config_file, "behaviors")
         for spec in sources.config:
-            module = importer.load(spec, config_file.parent, named_at)
+            module = importer.load(
+                spec, config_file.parent, Named(f"behaviors entry '{spec}'", named_at)
+            )
             for cls in behaviors_in(module):
                 collector.add(cls, shown(config_file), spec)
         listed = ", ".join(sources.config) if sources.config else "none"

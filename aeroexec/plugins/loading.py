@@ -24,20 +24,24 @@ import os
 import sys
 import traceback
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType, TracebackType
 
+from aeroexec.display import shown
 from aeroexec.errors import BehaviorError, Mark
 
 
-def shown(path: str | Path) -> str:
-    """A path as messages show it: relative to the working directory when inside it."""
-    text = str(path)
-    try:
-        relative = os.path.relpath(text)
-    except ValueError:  # another drive (Windows)
-        return text
-    return text if relative.startswith("..") else relative
+@dataclass(frozen=True, slots=True)
+class Named:
+    """How the user named a behavior module: `label` for messages ("--behaviors x",
+    "behaviors entry 'x'"), `at` the configuration line (None on the command line)."""
+
+    label: str
+    at: Mark | None = None
+
+    def error(self, problem: str) -> BehaviorError:
+        return BehaviorError(f"{self.label}: {problem}", self.at)
 
 
 class Importer:
@@ -46,21 +50,22 @@ class Importer:
     def __init__(self) -> None:
         self._fresh: set[str] = set()
 
-    def load(self, spec: str, root: Path, named_at: Mark) -> ModuleType:
+    def load(self, spec: str, root: Path, named: Named) -> ModuleType:
         """Import `spec` (a module name, a `.py` file or a package directory; relative
-        ones against `root`). `named_at`: where the user named it, for errors that have
-        no file of their own (a module that does not exist)."""
+        ones against `root`). `named`: how and where the user named it, for errors that
+        have no file of their own (a module that does not exist)."""
         if _looks_like_path(spec):
             path = Path(spec).expanduser()
             path = path if path.is_absolute() else root / path
-            base, dotted = _package_name(path, named_at, spec)
-            return self._import(dotted, base, named_at, spec)
-        local = _local_module(spec, root)
-        if local is not None:
-            return self._import(spec, root, named_at, spec)
-        return self._import(spec, None, named_at, spec)
+            base, dotted = _package_name(path, named)
+            return self._import(dotted, base, named)
+        if _local_module(spec, root) is not None:
+            return self._import(spec, root, named)
+        return self._import(spec, None, named, looked_in=root)
 
-    def _import(self, dotted: str, base: Path | None, named_at: Mark, spec: str) -> ModuleType:
+    def _import(
+        self, dotted: str, base: Path | None, named: Named, looked_in: Path | None = None
+    ) -> ModuleType:
         importlib.invalidate_caches()
         if base is not None:
             base_text = str(base)
@@ -73,18 +78,17 @@ class Importer:
         try:
             return importlib.import_module(dotted)
         except SyntaxError as exc:
-            raise _syntax_error(exc, named_at) from None
+            raise _syntax_error(exc, named) from None
         except ModuleNotFoundError as exc:
             if exc.name is not None and (dotted == exc.name or dotted.startswith(exc.name + ".")):
-                where = f"in {shown(base)} or " if base is not None else ""
-                raise BehaviorError(
-                    f"behaviors '{spec}': no module named '{exc.name}' "
-                    f"(looked {where}among the installed packages)",
-                    named_at,
+                where = shown(base or looked_in or Path.cwd())
+                raise named.error(
+                    f"no module named '{exc.name}' (looked in {where} and among the installed "
+                    "packages)"
                 ) from None
-            raise failure_in_user_code(exc, f"importing '{spec}' failed", named_at) from None
+            raise failure_in_user_code(exc, f"importing {named.label} failed", named.at) from None
         except Exception as exc:
-            raise failure_in_user_code(exc, f"importing '{spec}' failed", named_at) from None
+            raise failure_in_user_code(exc, f"importing {named.label} failed", named.at) from None
 
 
 def _looks_like_path(spec: str) -> bool:
@@ -102,35 +106,32 @@ def _local_module(dotted: str, root: Path) -> Path | None:
     return None
 
 
-def _package_name(path: Path, named_at: Mark, spec: str) -> tuple[Path, str]:
+def _package_name(path: Path, named: Named) -> tuple[Path, str]:
     """(the directory to put on sys.path, the dotted name) for a file or package."""
     path = path.resolve()
     if path.is_dir():
         if not (path / "__init__.py").is_file():
-            raise BehaviorError(
-                f"behaviors '{spec}': {shown(path)} is a directory without __init__.py "
-                "(name a package or a .py file)",
-                named_at,
+            raise named.error(
+                f"{shown(path)} is a directory without __init__.py (name a package or a .py file)"
             )
         parts = [path.name]
         directory = path.parent
     elif path.is_file():
         if path.suffix != ".py":
-            raise BehaviorError(f"behaviors '{spec}': not a .py file", Mark(shown(path)))
+            raise BehaviorError("not a .py file (behaviors are Python)", Mark(shown(path)))
         parts = [] if path.name == "__init__.py" else [path.stem]
         directory = path.parent
         if not parts:
             parts = [directory.name]
             directory = directory.parent
     else:
-        raise BehaviorError(f"behaviors '{spec}': no such file or directory", named_at)
+        raise named.error(f"no such file or directory: {shown(path)}")
     while (directory / "__init__.py").is_file():
         parts.insert(0, directory.name)
         directory = directory.parent
     if not all(part.isidentifier() for part in parts):
         raise BehaviorError(
-            f"behaviors '{spec}': {'.'.join(parts)} is not an importable module name",
-            Mark(shown(path)),
+            f"{'.'.join(parts)} is not an importable module name", Mark(shown(path))
         )
     return directory, ".".join(parts)
 
@@ -140,9 +141,9 @@ def _forget(top: str) -> None:
         del sys.modules[name]
 
 
-def _syntax_error(exc: SyntaxError, named_at: Mark) -> BehaviorError:
+def _syntax_error(exc: SyntaxError, named: Named) -> BehaviorError:
     if not exc.filename:
-        return BehaviorError(f"invalid Python in behaviors: {exc.msg}", named_at)
+        return named.error(f"invalid Python: {exc.msg}")
     mark = Mark(shown(exc.filename), exc.lineno or 0, exc.offset or 0)
     return BehaviorError(f"invalid Python: {exc.msg}", mark)
 
@@ -160,7 +161,7 @@ def _is_ours(filename: str) -> bool:
     return filename.startswith(package) or "importlib" in Path(filename).parts
 
 
-def failure_in_user_code(exc: BaseException, what: str, fallback: Mark) -> BehaviorError:
+def failure_in_user_code(exc: BaseException, what: str, fallback: Mark | None) -> BehaviorError:
     """`what`: TypeName: message, at the deepest frame of the developer's own code."""
     mark = fallback
     for frame in _frames(exc.__traceback__):
