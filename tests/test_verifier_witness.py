@@ -17,11 +17,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.catalog import read_catalog
 from aeroexec.catalog.loader import parse_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.errors import CatalogError
-from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.executive import Executive, GenericBehavior, Library
 from aeroexec.verifier import Finding, Outcome, Witness, check_catalog
 from aeroexec.verifier.witness_run import explains, model_reason, realize, run
