@@ -236,6 +236,11 @@ def behaviors_in(module: ModuleType) -> list[type[Behavior]]:
     found: list[type[Behavior]] = []
     for attribute, value in candidates:
         if not inspect.isclass(value):
+            if explicit:
+                raise BehaviorError(
+                    f"{attribute} is in __all__ but is not a Behavior subclass",
+                    _module_mark(module),
+                )
             continue
         if issubclass(value, Behavior):
             if not explicit and _aeroexec_own(value):
@@ -248,7 +253,7 @@ def behaviors_in(module: ModuleType) -> list[type[Behavior]]:
                     )
                 continue
             found.append(value)
-        elif value.__module__ == module.__name__ and _looks_like_a_behavior(value):
+        elif (explicit or value.__module__ == module.__name__) and _looks_like_a_behavior(value):
             raise BehaviorError(
                 f"{value.__qualname__} has behavior hooks but is not a subclass of "
                 "aeroexec.executive.Behavior",

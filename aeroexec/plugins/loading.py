@@ -54,7 +54,7 @@ class Importer:
         """Import `spec` (a module name, a `.py` file or a package directory; relative
         ones against `root`). `named`: how and where the user named it, for errors that
         have no file of their own (a module that does not exist)."""
-        if _looks_like_path(spec):
+        if _looks_like_path(spec) or (root / spec).exists():
             path = Path(spec).expanduser()
             path = path if path.is_absolute() else root / path
             base, dotted = _package_name(path, named)
