@@ -318,3 +318,18 @@ def test_an_entry_point_naming_something_else_is_an_error(
     error = error_of(BehaviorSources())
     assert error.mark is not None and error.mark.file.startswith("entry point odd = oddity_mod")
     assert "names int, not a module or a Behavior subclass" in error.message
+
+
+def test_a_package_without_all_provides_its_public_submodules(tmp_path: Path) -> None:
+    write(tmp_path / "fleet" / "__init__.py", "")
+    write(tmp_path / "fleet" / "survey.py", BEHAVIOR.format(cls="Survey", name="SURVEY"))
+    write(tmp_path / "fleet" / "deep" / "__init__.py", "")
+    write(tmp_path / "fleet" / "deep" / "orbit.py", BEHAVIOR.format(cls="Orbit", name="ORBIT"))
+    write(tmp_path / "fleet" / "_private.py", "raise RuntimeError('never imported')\n")
+    found = discover(cli(tmp_path / "fleet"))
+    assert found.implementations["SURVEY"].reference == "fleet.survey:Survey"
+    assert found.implementations["ORBIT"].reference == "fleet.deep.orbit:Orbit"
+    write(tmp_path / "fleet" / "broken.py", "x = (\n")
+    error = error_of(cli(tmp_path / "fleet"))
+    assert error.mark is not None and error.mark.file.endswith("fleet/broken.py")
+    assert error.mark.line == 1 and "invalid Python" in error.message

@@ -9,8 +9,9 @@ A behavior from the first three sources replaces the standard library's behavior
 same name; two of them implementing the same name is an error naming both (nothing
 decides silently which one flies). What a module provides: the `Behavior` subclasses in
 its namespace with a `name` (only those in `__all__` when it has one), leaving out
-aeroexec's own classes that it merely imported. An entry point names a module or one
-`Behavior` subclass.
+aeroexec's own classes that it merely imported; a package without `__all__` also provides
+those of its public submodules (imported in name order). An entry point names a module
+or one `Behavior` subclass.
 
 `discover(sources)` does it; `BehaviorSources` says where to look and is plain data, so
 a replay worker process can discover the same set again.
@@ -186,8 +187,8 @@ def discover(sources: BehaviorSources) -> BehaviorSet:
     declared = bool(sources.command_line) or sources.config is not None
     root = Path(sources.command_line_root)
     for spec in sources.command_line:
-        module = importer.load(spec, root, Named(f"{COMMAND_LINE} {spec}"))
-        for cls in behaviors_in(module):
+        named = Named(f"{COMMAND_LINE} {spec}")
+        for cls in behaviors_in(importer.load(spec, root, named), importer, named):
             collector.add(cls, COMMAND_LINE, spec)
     if sources.command_line:
         collector.searched.append(f"{COMMAND_LINE} {', '.join(sources.command_line)}")
@@ -195,10 +196,9 @@ def discover(sources: BehaviorSources) -> BehaviorSet:
         config_file = Path(sources.config_file)
         named_at = key_mark(config_file, "behaviors")
         for spec in sources.config:
-            module = importer.load(
-                spec, config_file.parent, Named(f"behaviors entry '{spec}'", named_at)
-            )
-            for cls in behaviors_in(module):
+            named = Named(f"behaviors entry '{spec}'", named_at)
+            module = importer.load(spec, config_file.parent, named)
+            for cls in behaviors_in(module, importer, named):
                 collector.add(cls, shown(config_file), spec)
         listed = ", ".join(sources.config) if sources.config else "none"
         collector.searched.append(f"{sources.config_label} behaviors ({listed})")
@@ -225,9 +225,28 @@ def discover(sources: BehaviorSources) -> BehaviorSet:
     return found
 
 
-def behaviors_in(module: ModuleType) -> list[type[Behavior]]:
-    """The behaviors a module provides (see the module docstring); `BehaviorError` for
-    a module that provides none, or a class that has behavior hooks but is no Behavior."""
+def behaviors_in(
+    module: ModuleType, importer: Importer | None = None, named: Named | None = None
+) -> list[type[Behavior]]:
+    """The behaviors a module provides (see the module docstring): a package without
+    `__all__` provides those of its public submodules too. `BehaviorError` for a module
+    that provides none, or a class that has behavior hooks but is no Behavior."""
+    found = _in_namespace(module)
+    explicit = getattr(module, "__all__", None) is not None
+    if hasattr(module, "__path__") and not explicit:
+        importer = importer or Importer()
+        for submodule in importer.submodules(module, named or Named(module.__name__)):
+            found.extend(_in_namespace(submodule))
+    if not found:
+        raise BehaviorError(
+            f"{module.__name__} provides no behavior (a subclass of "
+            "aeroexec.executive.Behavior with a `name`)",
+            _module_mark(module),
+        )
+    return sorted(dict.fromkeys(found), key=lambda c: (c.name, c.__module__, c.__qualname__))
+
+
+def _in_namespace(module: ModuleType) -> list[type[Behavior]]:
     names = getattr(module, "__all__", None)
     explicit = names is not None
     candidates = (
@@ -263,13 +282,7 @@ def behaviors_in(module: ModuleType) -> list[type[Behavior]]:
             raise BehaviorError(
                 f"{attribute} is in __all__ but is not a Behavior subclass", _module_mark(module)
             )
-    if not found:
-        raise BehaviorError(
-            f"{module.__name__} provides no behavior (a subclass of "
-            "aeroexec.executive.Behavior with a `name`)",
-            _module_mark(module),
-        )
-    return sorted(dict.fromkeys(found), key=lambda c: (c.name, c.__module__, c.__qualname__))
+    return found
 
 
 def _aeroexec_own(cls: type) -> bool:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import os
+import pkgutil
 import sys
 import traceback
 from collections.abc import Iterator
@@ -75,20 +76,35 @@ class Importer:
             if top not in self._fresh:
                 self._fresh.add(top)
                 _forget(top)
-        try:
-            return importlib.import_module(dotted)
-        except SyntaxError as exc:
-            raise _syntax_error(exc, named) from None
-        except ModuleNotFoundError as exc:
-            if exc.name is not None and (dotted == exc.name or dotted.startswith(exc.name + ".")):
-                where = shown(base or looked_in or Path.cwd())
-                raise named.error(
-                    f"no module named '{exc.name}' (looked in {where} and among the installed "
-                    "packages)"
-                ) from None
-            raise failure_in_user_code(exc, f"importing {named.label} failed", named.at) from None
-        except Exception as exc:
-            raise failure_in_user_code(exc, f"importing {named.label} failed", named.at) from None
+        return import_module(dotted, named, base or looked_in or Path.cwd())
+
+    def submodules(self, package: ModuleType, named: Named) -> Iterator[ModuleType]:
+        """A package's public submodules (no leading underscore), depth first, in name
+        order, imported with the same error reporting."""
+        for info in sorted(pkgutil.iter_modules(package.__path__), key=lambda i: i.name):
+            if info.name.startswith("_"):
+                continue
+            module = import_module(f"{package.__name__}.{info.name}", named, None)
+            yield module
+            if info.ispkg:
+                yield from self.submodules(module, named)
+
+
+def import_module(dotted: str, named: Named, looked_in: Path | None) -> ModuleType:
+    """`importlib.import_module`, with every failure a `BehaviorError` at its place."""
+    try:
+        return importlib.import_module(dotted)
+    except SyntaxError as exc:
+        raise _syntax_error(exc, named) from None
+    except ModuleNotFoundError as exc:
+        if exc.name is not None and (dotted == exc.name or dotted.startswith(exc.name + ".")):
+            where = shown(looked_in or Path.cwd())
+            raise named.error(
+                f"no module named '{exc.name}' (looked in {where} and among the installed packages)"
+            ) from None
+        raise failure_in_user_code(exc, f"importing {named.label} failed", named.at) from None
+    except Exception as exc:
+        raise failure_in_user_code(exc, f"importing {named.label} failed", named.at) from None
 
 
 def _looks_like_path(spec: str) -> bool:
