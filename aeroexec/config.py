@@ -29,11 +29,6 @@ from typing import Any
 from aeroexec.display import shown
 from aeroexec.errors import ConfigError, Mark
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
-
 PYPROJECT = "pyproject.toml"
 AEROEXEC_TOML = "aeroexec.toml"
 TABLE = "tool.aeroexec"
@@ -64,7 +59,7 @@ class ProjectConfig:
         if self.path is None:
             return "(no project configuration)"
         table = f" [{TABLE}]" if self.path.name == PYPROJECT else ""
-        return f"{self.path}{table}"
+        return f"{shown(self.path)}{table}"
 
 
 NO_CONFIG = ProjectConfig()
@@ -101,6 +96,12 @@ _POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
 
 
 def _read(path: Path) -> dict[str, Any]:
+    # Imported here: most commands run where no configuration file exists.
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover - exercised on Python 3.10 only
+        import tomli as tomllib
+
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:

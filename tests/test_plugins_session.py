@@ -279,3 +279,26 @@ def test_replay_refuses_a_behavior_whose_code_is_gone(project: Path) -> None:
         "aeroexec: error: --behaviors no_behaviors_here.py: no such file or directory: "
         "no_behaviors_here.py"
     )
+
+
+def test_fly_refuses_before_the_link_opens(project: Path) -> None:
+    code, out, err = invoke("fly", "mission.py", "--connect", "udpin:127.0.0.1:9", "-r", "x.mcap")
+    assert code == 2
+    assert "error: no implementation for INSPECT" in err and len(err.strip().splitlines()) == 1
+    assert "waiting for a heartbeat" not in out and not (project / "x.mcap").exists()
+
+
+def test_behaviors_lists_sources_and_what_the_catalog_lacks(project: Path) -> None:
+    code, out, err = invoke("behaviors")
+    assert code == 1, err
+    rows = {line.split()[0]: line for line in out.splitlines() if line and line[0].isupper()}
+    assert "survey:Survey" in rows["SURVEY"] and "survey.py:" in rows["SURVEY"]
+    assert "pyproject.toml (survey.py)" in rows["SURVEY"]
+    assert "aeroexec.behaviors.flight:TakeOff" in rows["TAKE_OFF"]
+    assert "standard library" in rows["TAKE_OFF"]
+    assert out.splitlines()[-2].startswith("looked in: pyproject.toml [tool.aeroexec] behaviors")
+    assert out.splitlines()[-1].endswith("c.yaml: 1 behavior(s) without an implementation: INSPECT")
+    code, out, _ = invoke("behaviors", "--catalog", str(DEFAULT_CATALOG))
+    assert code == 0 and out.splitlines()[-1].endswith("every behavior has an implementation")
+    survey = next(line for line in out.splitlines() if line.startswith("SURVEY "))
+    assert survey.endswith("(not in the catalog)")

@@ -138,6 +138,10 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
         replayed, how = replay_open(path, run, catalog, behaviors, options.output, horizon)
     notes.extend(how)
     changed = code_changes(run.code, code_manifest(behaviors, catalog.catalog).metadata())
+    if not run.code:
+        notes.append("the recording does not say which behavior code ran: code changes unknown")
+    if behaviors.stand_ins:
+        notes.append(f"stand-ins, as in the recording: {', '.join(behaviors.stand_ins)}")
     diff = diff_outcomes(
         run.outcome,
         replayed,
