@@ -4,6 +4,7 @@ own directory."""
 
 from __future__ import annotations
 
+import json
 import shutil
 import sys
 import textwrap
@@ -187,9 +188,11 @@ def test_replay_with_changed_code_reports_it_beside_the_differences(project: Pat
     lines = out.splitlines()
     assert lines[0].endswith("; code changed")
     assert "SURVEY" in lines[1] and "now ends GOAL_ACHIEVED after" in lines[1]
-    assert [line for line in lines if line.startswith("  code changed: ")] == [lines[-1]] and lines[
-        -1
-    ].startswith("  code changed: SURVEY: survey:Survey source changed (sha256:")
+    assert [line for line in lines if line.startswith("  code changed: ")] == [lines[-1]]
+    assert lines[-1].startswith("  code changed: SURVEY: survey:Survey source changed (sha256:")
+    code, out, err = invoke("replay", "base.mcap", "--format", "json")
+    (changed,) = json.loads(out)["recordings"][0]["code_changes"]
+    assert changed.startswith("SURVEY: survey:Survey source changed")
 
 
 def test_code_changes_compare_class_source_and_stand_ins() -> None:
