@@ -167,6 +167,11 @@ def _parse(path: Path, table: dict[str, Any]) -> ProjectConfig:
     values: dict[str, Any] = {}
     for key, value in table.items():
         known = _KEYS.get(key)
+        if known is None and key == "tool" and path.name == AEROEXEC_TOML:
+            raise ConfigError(
+                f"in {AEROEXEC_TOML} the keys are at the top level, without a [{TABLE}] table",
+                Mark(shown(path), 1, 1),
+            )
         if known is None:
             raise ConfigError(f"unknown key '{key}'{_did_you_mean(key)}", key_mark(path, key))
         check, wanted = known

@@ -125,3 +125,9 @@ def test_command_line_wins_over_the_file_which_wins_over_defaults(
     result = CliRunner().invoke(app, ["run", str(mission), "-r", str(rec), "-q", "--seed", "9"])
     assert result.exit_code == 0, result.output
     assert open_recording(rec).metadata["aeroexec"]["seed"] == "9"
+
+
+def test_aeroexec_toml_with_a_tool_table_says_where_keys_go(tmp_path: Path) -> None:
+    write(tmp_path / "aeroexec.toml", "[tool.aeroexec]\nseed = 1\n")
+    with pytest.raises(ConfigError, match=r"keys are at the top level, without a \[tool"):
+        load_config(tmp_path)
