@@ -68,3 +68,11 @@ class RecordingError(AeroexecError):
 
 class WorldError(AeroexecError):
     """A simulator world file is malformed."""
+
+
+class ConfigError(AeroexecError):
+    """The project configuration (`[tool.aeroexec]` or `aeroexec.toml`) is malformed."""
+
+
+class BehaviorError(AeroexecError):
+    """A developer's behaviors cannot be loaded, or a catalog behavior has no code."""

@@ -54,7 +54,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from aeroexec.catalog import DEFAULT_CATALOG, Catalog, load_catalog, parse_catalog
-from aeroexec.executive import Executive
+from aeroexec.executive import Executive, GenericBehavior
 from aeroexec.vehicles.null import NullVehicle
 
 RATE_TARGET = 50_000.0
@@ -160,7 +160,7 @@ def plan(
 
 
 def build(catalog: Catalog) -> Executive:
-    return Executive(catalog, vehicle=NullVehicle(), library={})
+    return Executive(catalog, vehicle=NullVehicle(), library={}, stand_in=GenericBehavior)
 
 
 def run(ex: Executive, sequence: list[tuple[str, dict[str, Any]]]) -> tuple[float, float]:

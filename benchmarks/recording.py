@@ -35,6 +35,7 @@ from mcap.writer import Writer
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
+from aeroexec.executive.behavior import GenericBehavior
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.executive import Executive
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
@@ -82,7 +83,9 @@ def mission_overhead(workdir: Path, repeat: int) -> tuple[float, float, float, i
 
 # -- (b) activations ---------------------------------------------------------------------------
 def drive(catalog: Catalog, activations: int, observers: list[BusObserver]) -> None:
-    executive = Executive(catalog, vehicle=NullVehicle(), library={}, observers=observers)
+    executive = Executive(
+        catalog, vehicle=NullVehicle(), library={}, stand_in=GenericBehavior, observers=observers
+    )
     for i in range(activations // 2):
         executive.activate_behavior("GO_TO_POINT", {"coordinates": [i % 50, 1.0, 2.0]})
         executive.step()

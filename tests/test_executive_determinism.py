@@ -21,6 +21,7 @@ from aeroexec.catalog import DEFAULT_CATALOG, load_catalog
 from aeroexec.executive import (
     EventCode,
     Executive,
+    GenericBehavior,
     MemoryObserver,
     ServiceCallRecord,
     TopicRecord,
@@ -119,7 +120,9 @@ def canonical(record: ServiceCallRecord | TopicRecord) -> str:
 
 def null_session(commands: Sequence[Command] = NULL_COMMANDS) -> tuple[list[str], list[str]]:
     observer = MemoryObserver()
-    ex = Executive(DEFAULT, vehicle=NullVehicle(), library={}, observers=[observer])
+    ex = Executive(
+        DEFAULT, vehicle=NullVehicle(), library={}, stand_in=GenericBehavior, observers=[observer]
+    )
     outcomes = drive(ex, commands)
     return [canonical(r) for r in observer.records], outcomes
 
@@ -305,7 +308,9 @@ def test_event_times_are_clock_times() -> None:
     """Log times come from the executive clock only: every behavior_event's log time is
     the event's own clock time, a whole number of ticks."""
     observer = MemoryObserver()
-    ex = Executive(DEFAULT, vehicle=NullVehicle(), library={}, observers=[observer])
+    ex = Executive(
+        DEFAULT, vehicle=NullVehicle(), library={}, stand_in=GenericBehavior, observers=[observer]
+    )
     drive(ex, NULL_COMMANDS)
     published = [
         r for r in observer.records if isinstance(r, TopicRecord) and r.topic == "behavior_event"
@@ -333,8 +338,14 @@ def test_observing_does_not_change_behavior() -> None:
     closures); it must behave exactly as when observed: same results, events, active
     set, references, processes and beliefs after every command -- and the same seq
     numbering, so an observer attached later sees the numbers it would have seen."""
-    observed = Executive(DEFAULT, vehicle=NullVehicle(), library={}, observers=[MemoryObserver()])
-    quiet = Executive(DEFAULT, vehicle=NullVehicle(), library={})
+    observed = Executive(
+        DEFAULT,
+        vehicle=NullVehicle(),
+        library={},
+        stand_in=GenericBehavior,
+        observers=[MemoryObserver()],
+    )
+    quiet = Executive(DEFAULT, vehicle=NullVehicle(), library={}, stand_in=GenericBehavior)
     for command in NULL_COMMANDS:
         assert drive(observed, [command]) == drive(quiet, [command]), command
         assert _state(observed) == _state(quiet), command

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from aeroexec.catalog import DEFAULT_CATALOG, load_catalog
-from aeroexec.executive import Behavior, EventCode, Executive
+from aeroexec.executive import Behavior, EventCode, Executive, GenericBehavior
 from aeroexec.vehicles.base import VehicleState
 from aeroexec.vehicles.null import NullVehicle
 
@@ -35,7 +35,9 @@ class Listening(Behavior):
 def test_listed_fault_fails_the_behavior_and_others_go_on() -> None:
     vehicle = FaultyVehicle()
     library = {cls.name: cls for cls in (Moving, Listening)}
-    ex = Executive(load_catalog(DEFAULT_CATALOG), vehicle=vehicle, library=library)
+    ex = Executive(
+        load_catalog(DEFAULT_CATALOG), vehicle=vehicle, library=library, stand_in=GenericBehavior
+    )
     assert ex.activate_behavior("PAY_ATTENTION_TO_VISUAL_MARKERS").ok
     assert ex.activate_behavior("GO_TO_POINT", {"coordinates": [1, 1, 1]}).ok
     ex.run_for(1.0)
@@ -82,7 +84,7 @@ capability_descriptors:
 """,
         "req.yaml",
     )
-    ex = Executive(catalog, vehicle=NullVehicle(), library={})
+    ex = Executive(catalog, vehicle=NullVehicle(), library={}, stand_in=GenericBehavior)
     assert ex.initiation.ok
     assert ex.capability_references == {"ODOMETRY": 1, "LOCALIZATION": 1}
     assert ex.running_processes == ("odometry", "localizer")

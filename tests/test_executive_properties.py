@@ -49,7 +49,7 @@ from aeroexec.catalog import (
     load_catalog,
     parse_catalog,
 )
-from aeroexec.executive import EventCode, Executive, MemoryObserver, TopicRecord
+from aeroexec.executive import EventCode, Executive, GenericBehavior, MemoryObserver, TopicRecord
 from aeroexec.executive.clock import NS_PER_S
 from aeroexec.vehicles.null import NullVehicle
 
@@ -356,7 +356,13 @@ class ExecutiveMachine(RuleBasedStateMachine):
         # Unobserved, the core takes its fast path: it must keep the same invariants.
         self.observed = data.draw(st.booleans(), label="observed")
         observers = [self.observer] if self.observed else []
-        self.ex = Executive(self.catalog, vehicle=NullVehicle(), library={}, observers=observers)
+        self.ex = Executive(
+            self.catalog,
+            vehicle=NullVehicle(),
+            library={},
+            stand_in=GenericBehavior,
+            observers=observers,
+        )
         assert self.ex.initiation.ok, self.ex.initiation.error
 
     @rule(data=st.data())

@@ -175,6 +175,7 @@ def make(
         vehicle=vehicle if vehicle is not None else NullVehicle(),
         library=dict(library or {}),
         observers=[observer],
+        stand_in=GenericBehavior,
     )
     if journal is not None:
         journal.ex = ex

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from aeroexec.catalog import THESIS_CATALOG, load_catalog
 from aeroexec.cli import app
 from aeroexec.errors import MissionError
-from aeroexec.executive import Executive, MemoryObserver
+from aeroexec.executive import Executive, GenericBehavior, MemoryObserver
 from aeroexec.executive.messages import ServiceCallRecord
 from aeroexec.mission import APPENDIX_C, MissionAPI, SessionConfig, load_mission, simulate
 from aeroexec.mission.script import compile_mission, run_script
@@ -89,7 +89,14 @@ def test_mission_commands_are_published_before_their_effect() -> None:
 
 # -- the API ------------------------------------------------------------------------------
 def null_api() -> MissionAPI:
-    return MissionAPI(Executive(load_catalog(THESIS_CATALOG), vehicle=NullVehicle(), library={}))
+    return MissionAPI(
+        Executive(
+            load_catalog(THESIS_CATALOG),
+            vehicle=NullVehicle(),
+            library={},
+            stand_in=GenericBehavior,
+        )
+    )
 
 
 def test_execute_behavior_of_a_recurrent_behavior_is_refused_at_once() -> None:

@@ -179,7 +179,7 @@ def test_recover_truncated_file_gives_a_complete_file(session_file: Path, tmp_pa
         ]
     assert recovered == original[: len(recovered)]
     assert attachments == ["catalog.yaml", "mission.py", "world.yaml"]
-    assert metadata == ["aeroexec"]
+    assert metadata == ["aeroexec", "behaviors"]
     code, out, _ = _invoke("info", str(fixed), "--format", "json")
     assert json.loads(out)["complete"] is True
 

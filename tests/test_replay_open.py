@@ -22,6 +22,7 @@ from test_replay_support import (
     record_live_like,
 )
 
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.executive.clock import SimClock
 from aeroexec.recording import open_recording
 from aeroexec.replay import Mode, ReplayOptions, ReplayResult, extract_outcome, replay_recording
@@ -189,7 +190,8 @@ def test_stand_ins_end_as_recorded_and_inherit_situation_checks() -> None:
 
     catalog = load_catalog(DEFAULT_CATALOG)
     script = Script()
-    executive = Executive(catalog, vehicle=NullVehicle(), library=stand_in_library(catalog, script))
+    library = stand_in_library(catalog, script, STANDARD_LIBRARY)
+    executive = Executive(catalog, vehicle=NullVehicle(), library=library)
     land = CommandOutcome(0, 0, "execute_behavior", "LAND")
     script.arm(land)  # no recorded answer: the real LAND's check runs (on the ground)
     refused = executive.activate_behavior("LAND")

@@ -11,6 +11,7 @@ import io
 from collections.abc import Iterable
 from pathlib import Path
 
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.executive.clock import NS_PER_S, SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.api import MissionAPI
@@ -138,7 +139,13 @@ def record_live_like(
         attachments=attachments,
     ) as recorder:
         clock = OffsetClock(round(start_s * NS_PER_S))
-        executive = Executive(catalog, vehicle=SimVehicle(), clock=clock, observers=[recorder])
+        executive = Executive(
+            catalog,
+            vehicle=SimVehicle(),
+            clock=clock,
+            library=STANDARD_LIBRARY,
+            observers=[recorder],
+        )
         api = MissionAPI(executive)
         api.execute_behavior("TAKE_OFF")
         api.activate_behavior("PAY_ATTENTION_TO_VISUAL_MARKERS")

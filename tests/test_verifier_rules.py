@@ -1,6 +1,7 @@
 """Every rule of the registry has a fixture that triggers it, at the places the fixture
 marks with `# expect CODE [at TOKEN]` comments (line, and the column where TOKEN starts),
-and a clean near-miss fixture where it stays silent."""
+and a clean near-miss fixture where it stays silent. The catalog-against-code rules
+(AX8xx) check their fixtures against the behaviors of `code_behaviors.py`."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import pytest
 
 from aeroexec.catalog import read_catalog
 from aeroexec.catalog.model import Severity
+from aeroexec.plugins import BehaviorSet, BehaviorSources, discover
 from aeroexec.verifier import Finding, Rule, all_rules, check_catalog, check_mission
 from aeroexec.verifier.missions import read_mission
 
@@ -19,6 +21,7 @@ FIXTURES = Path(__file__).resolve().parent / "fixtures" / "verifier"
 RULES = FIXTURES / "rules"
 MISSIONS = FIXTURES / "missions"
 MISSION_CATALOG = MISSIONS / "catalog.yaml"
+CODE_BEHAVIORS = FIXTURES / "code_behaviors.py"
 #: Rules that fire on every catalog (the dialect note): they have no clean fixture.
 ALWAYS = {"AX109"}
 
@@ -50,10 +53,15 @@ def fixture_for(rule: Rule, clean: bool = False) -> Path:
     return path
 
 
-def findings_of(path: Path) -> list[Finding]:
+def code_behaviors() -> BehaviorSet:
+    return discover(BehaviorSources(command_line=(str(CODE_BEHAVIORS),), entry_points=False))
+
+
+def findings_of(path: Path, rule: Rule | None = None) -> list[Finding]:
     if path.suffix == ".py":
         return check_mission(read_mission(path), read_catalog(MISSION_CATALOG))
-    return check_catalog(read_catalog(path))
+    behaviors = code_behaviors() if rule is not None and rule.kind == "code" else None
+    return check_catalog(read_catalog(path), behaviors=behaviors)
 
 
 def _ids(rule: Rule) -> str:
@@ -66,7 +74,7 @@ def test_rule_fires_exactly_where_the_fixture_says(rule: Rule) -> None:
     assert path.exists(), f"every rule needs a fixture: {path.name} is missing"
     expected = expectations(path)[rule.code]
     assert expected, f"{path.name} marks no '# expect {rule.code}' place"
-    found = [f for f in findings_of(path) if f.rule == rule.code]
+    found = [f for f in findings_of(path, rule) if f.rule == rule.code]
     assert found, f"{rule.code} did not fire on {path.name}"
     places = {(f.line, f.column) for f in found}
     lines_only = {line for line, column in expected if column is None}
@@ -86,7 +94,7 @@ def test_rule_fires_exactly_where_the_fixture_says(rule: Rule) -> None:
 def test_rule_is_silent_on_its_clean_fixture(rule: Rule) -> None:
     path = fixture_for(rule, clean=True)
     assert path.exists(), f"every rule needs a clean fixture: {path.name} is missing"
-    findings = findings_of(path)
+    findings = findings_of(path, rule)
     assert [str(f) for f in findings if f.rule == rule.code] == []
     assert [str(f) for f in findings if f.severity is Severity.ERROR] == []
 

@@ -1,9 +1,12 @@
-"""Witnesses replay in the real executive core and make the problem happen.
+"""Witnesses replay in the real executive core, with the real behaviors, and make the
+problem happen for the reason the verifier gives.
 
 Every finding with a witness (from the rule fixtures, from the real catalogs and from
-generated catalogs) is replayed step by step against `aeroexec.executive.Executive`:
-the outcome the verifier predicts is the outcome the executive produces. Near-miss
-catalogs show the same steps succeeding once the defect is repaired.
+generated catalogs) is replayed step by step against `aeroexec.executive.Executive`
+with the standard library (stand-ins, explicitly, for behaviors it does not implement):
+the outcome the verifier predicts is the outcome the executive produces, and a rejection
+says the model's reason. Near-miss catalogs show the same steps succeeding once the
+defect is repaired.
 """
 
 from __future__ import annotations
@@ -14,46 +17,44 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.catalog import read_catalog
 from aeroexec.catalog.loader import parse_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.errors import CatalogError
-from aeroexec.executive import Executive
+from aeroexec.executive import Executive, GenericBehavior, Library
 from aeroexec.verifier import Finding, Outcome, Witness, check_catalog
+from aeroexec.verifier.witness_run import explains, model_reason, realize, run
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 RULES = FIXTURES / "verifier" / "rules"
 REAL = FIXTURES / "verifier_catalogs"
 
 
-def replay(catalog: Catalog, witness: Witness) -> Executive:
-    """Run the witness; assert the executive does what the witness says.
+def replay(catalog: Catalog, witness: Witness, library: Library = STANDARD_LIBRARY) -> Executive:
+    """Run the witness with the real behaviors; assert the executive does what the
+    witness says, for the reason the model gives.
 
-    Witnesses are about the catalog, so they are replayed with the generic behavior
-    implementation (`library={}`): a library behavior's own situation check (LAND
-    needs the drone flying) is not what the verifier predicts.
+    The witness is first completed for the behaviors (`realize`: TAKE_OFF before a motion
+    behavior, arguments the catalog accepts); catalog behaviors the library does not
+    implement run as explicit stand-ins. Initiation may fail for another finding of the
+    same catalog; the model knows that no default capability is then referenced, and so
+    does the executive.
     """
-    executive = Executive(catalog, library={})
+    realized = realize(catalog, witness, library)
+    assert not realized.caveat, realized.describe()
+    assert realized.outcome is witness.outcome
+    assert [s.activate for s in realized.steps] == [s.activate for s in witness.steps]
+    done = run(catalog, realized, library)
+    executive = done.executive
     if witness.outcome is Outcome.INITIATION_FAILS:
-        assert witness.steps == ()
-        assert not executive.initiation.ok, "initiation was expected to fail"
-        assert executive.initiation.error
-        return executive
-    # Initiation may fail for another finding of the same catalog; the model knows that
-    # no default capability is then referenced, and so does the executive.
-    *prefix, last = witness.steps
-    for step in prefix:
-        result = executive.activate_behavior(step.activate, dict(step.arguments))
-        assert result.ok, f"step {step.activate} was rejected: {result.error}"
-        assert step.activate in executive.active_behaviors
-    result = executive.activate_behavior(last.activate, dict(last.arguments))
-    if witness.outcome is Outcome.REJECTED:
-        assert not result.ok, f"{last.activate} was accepted; active: {executive.active_behaviors}"
-        assert result.error
-        assert last.activate not in executive.active_behaviors
+        assert not executive.initiation.ok and executive.initiation.error
+    elif witness.outcome is Outcome.REJECTED:
+        reason = model_reason(catalog, witness)
+        assert reason and explains(reason, done.error), (reason, done.error)
+        assert realized.steps[-1].activate not in executive.active_behaviors
     else:
-        assert result.ok, result.error
-        for step in witness.steps:
+        for step in realized.steps:
             assert step.activate in executive.active_behaviors
     return executive
 
@@ -110,20 +111,24 @@ def test_witness_json_shape() -> None:
 
 def test_repaired_catalog_accepts_the_same_steps() -> None:
     """The AX304 witness against its clean near-miss: FOLLOW preempts GO_TO cleanly."""
-    executive = Executive(read_catalog(RULES / "AX304.clean.yaml"), library={})
+    executive = Executive(
+        read_catalog(RULES / "AX304.clean.yaml"), library={}, stand_in=GenericBehavior
+    )
     assert executive.activate_behavior("GO_TO").ok
     assert executive.activate_behavior("FOLLOW").ok
     assert executive.active_behaviors == ("FOLLOW",)
 
 
 def test_repaired_defaults_initiate() -> None:
-    assert Executive(read_catalog(RULES / "AX302.clean.yaml"), library={}).initiation.ok
+    assert Executive(
+        read_catalog(RULES / "AX302.clean.yaml"), library={}, stand_in=GenericBehavior
+    ).initiation.ok
 
 
 def test_asymmetric_witness_order_matters() -> None:
     """AX401's witness leaves both running; the opposite order preempts."""
     catalog = read_catalog(RULES / "AX401.yaml")
-    executive = Executive(catalog, library={})
+    executive = Executive(catalog, library={}, stand_in=GenericBehavior)
     assert executive.activate_behavior("GO_TO").ok
     assert executive.activate_behavior("DOCK").ok
     assert "GO_TO" not in executive.active_behaviors
@@ -203,4 +208,4 @@ def test_generated_catalog_witnesses_replay(text: str) -> None:
     catalog = parse_catalog(text, "generated.yaml")
     for finding in witnessed(check_catalog(catalog)):
         assert finding.witness is not None
-        replay(catalog, finding.witness)
+        replay(catalog, finding.witness, library={})  # every behavior a stand-in

@@ -23,6 +23,7 @@ class TakeOff(MotionBehavior):
     """Arm and climb to `altitude` (1 m, Aerostack's usual take-off height), then hold."""
 
     name = "TAKE_OFF"
+    argument_names = ()
     altitude = 1.0
     tolerance = 0.05  # m
 
@@ -54,6 +55,7 @@ class Land(Behavior):
     landing, since hovering is not a safe default for a vehicle that was told to land."""
 
     name = "LAND"
+    argument_names = ()
     fails_on_faults = LINK_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

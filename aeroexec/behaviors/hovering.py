@@ -25,6 +25,7 @@ class KeepHovering(MotionBehavior):
     that visual marker: it must be in view at the start and is a failure to lose."""
 
     name = "KEEP_HOVERING"
+    argument_names = ("DURATION", "ARUCO")
     default_duration = 5.0
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -50,6 +51,7 @@ class StartHovering(MotionBehavior):
     """Brake and hold position; succeeds once the vehicle has (nearly) stopped."""
 
     name = "START_HOVERING"
+    argument_names = ()
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)
@@ -71,6 +73,7 @@ class Flip(MotionBehavior):
     battery that is not low (a flip draws a burst of power)."""
 
     name = "FLIP"
+    argument_names = ("DIRECTION",)
     min_altitude = 1.0  # m
     max_duration = 3.0  # s: a flip the vehicle has not finished by then went wrong
 

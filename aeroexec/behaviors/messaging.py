@@ -17,6 +17,7 @@ class BroadcastMessage(Behavior):
     """
 
     name = "BROADCAST_MESSAGE"
+    argument_names = ("TEXT",)
 
     def on_start(self, args: Mapping[str, Any]) -> None:
         if "TEXT" not in args:

@@ -29,6 +29,7 @@ class GoToPoint(MotionBehavior):
     """Fly to COORDINATES (absolute) or RELATIVE_COORDINATES (from where it starts)."""
 
     name = "GO_TO_POINT"
+    argument_names = ("COORDINATES", "RELATIVE_COORDINATES")
     #: Reached = within `tolerance` and nearly stopped. 5 cm: close enough that a point
     #: memorized right after arriving is the point asked for; loose enough for a real
     #: autopilot's position hold.
@@ -88,6 +89,7 @@ class StartMoving(MotionBehavior):
     """
 
     name = "START_MOVING"
+    argument_names = ("SPEED", "DIRECTION")
     tolerance = 0.1  # m/s
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -126,6 +128,7 @@ class FollowObjectImage(MotionBehavior):
     `reach` metres of it (horizontally); fails if the object stays out of sight."""
 
     name = "FOLLOW_OBJECT_IMAGE"
+    argument_names = ()
     reach = 1.0  # m
     lost_after = 2.0  # s out of sight
 

@@ -15,6 +15,7 @@ class PayAttentionToVisualMarkers(Behavior):
     what WAIT UNTIL_OBSERVED_VISUAL_MARKER and missions ask about. Never ends by itself."""
 
     name = "PAY_ATTENTION_TO_VISUAL_MARKERS"
+    argument_names = ()
 
     def on_start(self, args: Mapping[str, Any]) -> None:
         self._look()

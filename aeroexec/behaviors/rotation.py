@@ -23,6 +23,7 @@ class Rotate(MotionBehavior):
     yaw in degrees. 270 and -90 are the same heading; the vehicle turns the short way."""
 
     name = "ROTATE"
+    argument_names = ("ANGLE",)
     tolerance = 1.0  # degrees
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

@@ -16,6 +16,7 @@ class Wait(Behavior):
     and DURATION bounds it (TIME_OUT). Needs no vehicle, so it is always allowed."""
 
     name = "WAIT"
+    argument_names = ("DURATION", "UNTIL_OBSERVED_VISUAL_MARKER")
 
     def on_start(self, args: Mapping[str, Any]) -> None:
         duration = args.get("DURATION")

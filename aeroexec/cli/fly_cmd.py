@@ -8,6 +8,14 @@ import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.project import (
+    AllowUnimplementedOption,
+    BehaviorsOption,
+    catalog_path,
+    first,
+    project,
+    project_behaviors,
+)
 from aeroexec.cli.run_cmd import finish, print_row, print_summary
 from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL
 from aeroexec.mavlink.vehicle import MavlinkVehicle
@@ -37,11 +45,17 @@ def fly_command(
     mission: Path = typer.Argument(
         ..., metavar="MISSION", help="Mission script (Python, defines runMission())."
     ),
-    connect: str = typer.Option(
-        DEFAULT_GCS_URL, "--connect", help="MAVLink endpoint: udpin:HOST:PORT or udpout:HOST:PORT."
+    connect: str | None = typer.Option(
+        None,
+        "--connect",
+        help="MAVLink endpoint: udpin:HOST:PORT or udpout:HOST:PORT "
+        f"(default: the project's, else {DEFAULT_GCS_URL}).",
     ),
-    catalog: Path = typer.Option(
-        DEFAULT_CATALOG, "--catalog", "-c", help="Behavior catalog (YAML)."
+    catalog: Path | None = typer.Option(
+        None,
+        "--catalog",
+        "-c",
+        help="Behavior catalog (YAML); default: the project's, else the bundled default.",
     ),
     record: Path | None = typer.Option(
         None,
@@ -64,6 +78,8 @@ def fly_command(
     connect_timeout: float = typer.Option(
         10.0, "--connect-timeout", help="Seconds to wait for the first heartbeat."
     ),
+    behaviors: BehaviorsOption = None,
+    allow_unimplemented: AllowUnimplementedOption = False,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the summary."),
     debug: bool = typer.Option(False, "--debug", help="Show the traceback if the mission raises."),
 ) -> None:
@@ -79,20 +95,29 @@ def fly_command(
     Exit code 0 when the mission function returned, 1 when it raised, 2 when an input
     could not be read or the autopilot never answered.
     """
+    settings = project()
     config = FlightConfig(
         mission=mission,
-        connect=connect,
-        catalog=catalog,
+        connect=first(connect, settings.connect, DEFAULT_GCS_URL),
+        catalog=catalog_path(catalog, settings, DEFAULT_CATALOG),
         record=record,
         heartbeat_timeout=heartbeat_timeout,
         failsafe=failsafe,  # type: ignore[arg-type]  (checked by FlightConfig)
         signing_key=signing_key,
         allow_remote=allow_remote,
         connect_timeout=connect_timeout,
+        behaviors=project_behaviors(behaviors, settings),
+        allow_unimplemented=allow_unimplemented,
     )
     printer = [] if quiet else [ActivityLog(on_change=print_row)]
     try:
-        result = fly(config, observers=printer, on_listening=_listening, on_connected=_connected)
+        result = fly(
+            config,
+            observers=printer,
+            on_listening=_listening,
+            on_connected=_connected,
+            announce=error_line,
+        )
     except KeyboardInterrupt:
         error_line("aeroexec: interrupted (a flying vehicle was told to brake and hold)")
         raise typer.Exit(130) from None

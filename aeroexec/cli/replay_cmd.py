@@ -11,7 +11,9 @@ import typer
 
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
 from aeroexec.errors import AeroexecError, Mark, RecordingError
+from aeroexec.plugins import discover
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for, replay_many
 from aeroexec.replay.inputs import expand_inputs
@@ -121,6 +123,7 @@ def replay(
     jobs: Annotated[
         int, typer.Option("--jobs", "-j", min=1, help="Replay this many recordings at once.")
     ] = 1,
+    behaviors: BehaviorsOption = None,
     output_format: FormatOption = OutputFormat.text,
     tolerance: ToleranceOption = 0.5,
     position_tolerance: PositionToleranceOption = 0.1,
@@ -130,8 +133,11 @@ def replay(
     processes, end events and their times, the final vehicle state.
 
     Closed loop re-runs the recorded mission script in the simulator with the recorded
-    world and seed; with the recording's own catalog and unchanged code it reproduces
-    the recording exactly (and -o writes the same bytes). Open loop feeds the recorded
+    world and seed and the behaviors of today's code (-b/--behaviors, the project's
+    [tool.aeroexec] behaviors, entry points, the standard library; never code a recording
+    carries); with the recording's own catalog and unchanged code it reproduces the
+    recording exactly (and -o writes the same bytes). Behaviors whose code differs from
+    the recorded code are reported as "code changed". Open loop feeds the recorded
     commands, vehicle states and behavior outcomes to the executive and compares only
     its decisions.
 
@@ -145,6 +151,8 @@ def replay(
     """
     if catalog is not None:
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
+    sources = behavior_sources(behaviors, project())
+    discover(sources)  # so are bad behaviors (and the replays reuse what was found)
     inputs = expand_inputs(recordings)
     paths = [i.path for i in inputs if i.error is None]
     _check_outputs(paths, output, out_dir)
@@ -153,6 +161,7 @@ def replay(
         mode=mode,
         output=output,
         tolerance=tolerance_of(tolerance, position_tolerance),
+        behaviors=sources,
     )
     progress = _progress(len(paths))
     if progress is None:

@@ -8,6 +8,14 @@ import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.project import (
+    AllowUnimplementedOption,
+    BehaviorsOption,
+    catalog_path,
+    first,
+    project,
+    project_behaviors,
+)
 from aeroexec.cli.tables import print_table
 from aeroexec.mission.activity import Activation, ActivityLog, format_arguments
 from aeroexec.mission.session import SessionConfig, SessionResult, simulate
@@ -63,16 +71,23 @@ def run(
     mission: Path = typer.Argument(
         ..., metavar="MISSION", help="Mission script (Python, defines runMission())."
     ),
-    catalog: Path = typer.Option(
-        DEFAULT_CATALOG, "--catalog", "-c", help="Behavior catalog (YAML)."
+    catalog: Path | None = typer.Option(
+        None,
+        "--catalog",
+        "-c",
+        help="Behavior catalog (YAML); default: the project's, else the bundled default.",
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed for the simulator's random failures."),
+    seed: int | None = typer.Option(
+        None, "--seed", help="Seed for the simulator's random failures (default: 0)."
+    ),
     world: Path | None = typer.Option(
         None, "--world", help="World file (markers, failures); default: built-in world."
     ),
     record: Path | None = typer.Option(
         None, "--record", "-r", help="Record the session to this MCAP file."
     ),
+    behaviors: BehaviorsOption = None,
+    allow_unimplemented: AllowUnimplementedOption = False,
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the summary."),
     debug: bool = typer.Option(False, "--debug", help="Show the traceback if the mission raises."),
 ) -> None:
@@ -82,12 +97,24 @@ def run(
 
         aeroexec run missions/appendix_c.py --record flight.mcap
 
-    Exit code 0 when the mission function returned, 1 when it raised, 2 when an input
-    (mission, catalog, world) could not be read.
+    Behaviors come from -b/--behaviors, the project's [tool.aeroexec] table (nearest
+    pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
+    standard library. Exit code 0 when the mission function returned, 1 when it raised,
+    2 when an input (mission, catalog, world, configuration, behaviors) could not be
+    used, or a catalog behavior has no implementation.
     """
-    config = SessionConfig(mission=mission, catalog=catalog, seed=seed, world=world, record=record)
+    settings = project()
+    config = SessionConfig(
+        mission=mission,
+        catalog=catalog_path(catalog, settings, DEFAULT_CATALOG),
+        seed=first(seed, settings.seed, 0),
+        world=first(world, settings.world, None),
+        record=record,
+        behaviors=project_behaviors(behaviors, settings),
+        allow_unimplemented=allow_unimplemented,
+    )
     printer = [] if quiet else [ActivityLog(on_change=print_row)]
-    result = simulate(config, observers=printer)
+    result = simulate(config, observers=printer, announce=error_line)
     print_summary(result)
     finish(result, debug)
 

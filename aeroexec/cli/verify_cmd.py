@@ -9,6 +9,7 @@ import typer
 
 from aeroexec.catalog.model import Severity
 from aeroexec.cli.app import app, guarded
+from aeroexec.cli.project import BehaviorsOption, project, project_behaviors
 from aeroexec.errors import AeroexecError
 from aeroexec.verifier import expand_catalog_paths, verify
 from aeroexec.verifier.registry import get, suggest_code
@@ -24,11 +25,18 @@ with --mission are read with Python's ast (never run); every execute, activate a
 inhibit call with literal arguments is checked against each catalog. Every input is
 read before any check runs: an unreadable one stops the run with exit code 2.
 
+When the project declares its behaviors (-b/--behaviors, `behaviors` in
+[tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
+catalog is also checked against that code (AX8xx: behaviors without an implementation,
+argument names the code does not read), and witnesses are completed to happen with the
+real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catalog.
+
 \b
 Examples:
   aeroexec verify catalog/default.yaml
   aeroexec verify catalog/*.yaml --mission 'missions/*.py' --witness
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
+  aeroexec verify my-catalog.yaml -b mybehaviors
   aeroexec verify --explain AX304
 
 \b
@@ -78,6 +86,7 @@ def verify_command(
     color: str | None = typer.Option(
         None, "--color", metavar="WHEN", help="always or never (default: on a terminal)."
     ),
+    behaviors: BehaviorsOption = None,
 ) -> None:
     if explain is not None:
         rule = get(explain)
@@ -95,9 +104,15 @@ def verify_command(
         raise AeroexecError(f"unknown severity {min_severity!r} (info, warning or error)") from None
     if color not in (None, "always", "never"):
         raise AeroexecError(f"--color takes always or never, got {color!r}")
+    settings = project()
+    if not catalogs and settings.catalog is not None:
+        catalogs = [str(settings.catalog)]
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
-    report = verify(expand_catalog_paths(catalogs), mission)
+    found = project_behaviors(behaviors, settings)
+    report = verify(
+        expand_catalog_paths(catalogs), mission, behaviors=found if found.declared else None
+    )
     shown = report.at_least(threshold)
     use_color = _use_color(color)
     text = render(shown, output_format, witness=witness, color=use_color)

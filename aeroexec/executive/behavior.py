@@ -77,6 +77,11 @@ class Behavior:
     #: link. Faults the behavior should judge itself (a stuck motor shows as
     #: WRONG_PROGRESS) are not listed.
     fails_on_faults: ClassVar[tuple[str, ...]] = ()
+    #: The argument names `on_start` reads, as the behavior spells them; None: not
+    #: declared. Declared names are matched to the catalog's regardless of case (a
+    #: catalog's `coordinates` reaches a behavior that reads `COORDINATES`), and the
+    #: verifier checks them against the catalog (a catalog argument no code reads).
+    argument_names: ClassVar[tuple[str, ...] | None] = None
 
     # -- the author's hooks ------------------------------------------------------------
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -84,7 +89,8 @@ class Behavior:
         return ALLOWED
 
     def on_start(self, args: Mapping[str, Any]) -> None:
-        """Start doing the job; `args` are validated, keyed by the catalog's spelling."""
+        """Start doing the job; `args` are validated, keyed by the names declared in
+        `argument_names` (else by the catalog's spelling)."""
 
     def on_run(self) -> Finished | None:
         """Called every tick while running; return `Finished(...)` when done."""
@@ -165,7 +171,7 @@ class Behavior:
             self._host.resources.cancel_resources(self.behavior_name)
             return started
         self.uid = uid
-        self._arguments = dict(arguments)
+        self._arguments = self._spelled(arguments)
         self._started_ns = self._host.clock.now_ns()
         self._deadline_ns = (
             None
@@ -177,6 +183,14 @@ class Behavior:
         except Exception as exc:
             self.finish(EventCode.PROCESS_FAILURE, f"on_start failed: {_describe(exc)}")
         return OK
+
+    def _spelled(self, arguments: Mapping[str, Any]) -> dict[str, Any]:
+        """The arguments keyed as the behavior declares them (case-insensitive match)."""
+        declared = self.argument_names
+        if not declared:
+            return dict(arguments)
+        spelling = {name.casefold(): name for name in declared}
+        return {spelling.get(key.casefold(), key): value for key, value in arguments.items()}
 
     def tick(self) -> None:
         """One run() of Algorithm 3.3: supervise, and end with one event when finished."""

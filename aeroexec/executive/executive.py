@@ -1,6 +1,6 @@
 """The `Executive` facade: catalog + behavior library + vehicle + clock + bus, wired.
 
-    ex = Executive(load_catalog("catalog/default.yaml"))
+    ex = Executive(load_catalog("catalog/default.yaml"), library=STANDARD_LIBRARY)
     ex.activate_behavior("TAKE_OFF")
     ex.run_until(lambda: not ex.active_behaviors, timeout_s=30)
 
@@ -8,6 +8,11 @@ One thread, one clock: `step()` advances the clock one tick, moves the vehicle,
 refreshes the beliefs it feeds, runs every active behavior once (in catalog order) and
 publishes the vehicle state. With a `SimClock` the whole run is a pure function of the
 catalog, the code, the world, the seed and the commands.
+
+The executive is given its behavior library (the session composes it: the standard
+library, a developer's behaviors); it imports none itself. A catalog behavior the library
+does not implement is an error, unless a `stand_in` class is given explicitly (the
+verifier's witnesses and the generated-catalog tests run catalogs that way).
 """
 
 from __future__ import annotations
@@ -16,7 +21,8 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from aeroexec.catalog.model import Catalog
-from aeroexec.executive.behavior import Behavior, GenericBehavior
+from aeroexec.errors import BehaviorError
+from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.bus import Bus, BusObserver
 from aeroexec.executive.clock import NS_PER_S, Clock, SimClock
@@ -36,22 +42,24 @@ def _default_vehicle() -> Vehicle:
     return SimVehicle()
 
 
-def _default_library() -> Library:
-    from aeroexec.behaviors import STANDARD_LIBRARY
-
-    return STANDARD_LIBRARY
-
-
 class Executive:
     def __init__(
         self,
         catalog: Catalog,
         vehicle: Vehicle | None = None,
         clock: Clock | None = None,
-        library: Library | None = None,
+        *,
+        library: Library,
         observers: Iterable[BusObserver] = (),
         drone: str = "drone1",
+        stand_in: type[Behavior] | None = None,
     ) -> None:
+        missing = [name for name in catalog.behaviors if name not in library]
+        if missing and stand_in is None:
+            raise BehaviorError(
+                f"no implementation for {', '.join(missing)} in the executive's library "
+                "(give stand_in=GenericBehavior to run stand-ins)"
+            )
         self.catalog = catalog
         self.drone = drone
         self.clock: Clock = clock or SimClock()
@@ -69,9 +77,10 @@ class Executive:
         self.specialist = BehaviorSpecialist(catalog, self.bus)
         self.resources = ResourceManager(catalog, self.bus, self.specialist)
         self.behaviors: dict[str, Behavior] = {}
-        chosen = _default_library() if library is None else library
         for name, descriptor in catalog.behaviors.items():
-            behavior = chosen.get(name, GenericBehavior)()
+            cls = library.get(name, stand_in)
+            assert cls is not None  # checked above
+            behavior = cls()
             behavior.bind(self, descriptor)
             self.behaviors[name] = behavior
         self.coordinator = BehaviorCoordinator(self)

@@ -30,7 +30,13 @@ from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpo
 from aeroexec.mavlink.vehicle import FAILSAFES, Failsafe, MavlinkConfig, MavlinkVehicle
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionScript, load_mission, run_script
-from aeroexec.mission.session import SessionResult, session_observers
+from aeroexec.mission.session import (
+    SessionResult,
+    session_code,
+    session_observers,
+    stand_in_metadata,
+)
+from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.vehicles.base import VehicleCommandError
 
 
@@ -49,6 +55,10 @@ class FlightConfig:
     connect_timeout: float = 10.0
     ack_timeout: float = 1.0
     retries: int = 2
+    #: The behaviors to fly with (default: the standard library).
+    behaviors: BehaviorSet | None = None
+    #: Fly catalog behaviors without an implementation as announced stand-ins.
+    allow_unimplemented: bool = False
 
     def vehicle_config(self) -> MavlinkConfig:
         """The vehicle's configuration; `MavlinkError` for values that cannot work."""
@@ -84,12 +94,15 @@ def fly(
     catalog_text: str | None = None,
     on_listening: Callable[[MavlinkVehicle], None] | None = None,
     on_connected: Callable[[MavlinkVehicle], None] | None = None,
+    announce: Callable[[str], None] | None = None,
 ) -> SessionResult:
     """Fly one mission on a live autopilot. Unreadable inputs (mission, catalog, URL,
-    key) raise `AeroexecError`s before the link opens; no heartbeat raises `MavlinkError`
-    before any recording file is created."""
+    key) and catalog behaviors without an implementation raise `AeroexecError`s before
+    the link opens; no heartbeat raises `MavlinkError` before any recording file is
+    created. `announce` is told each stand-in once, before the link opens."""
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
+    code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
     vehicle_config = config.vehicle_config()
     parse_endpoint(config.connect, allow_remote=config.allow_remote)
     clock = WallClock()
@@ -113,6 +126,7 @@ def fly(
             "signing": "yes" if vehicle_config.signing_key is not None else "no",
             "failsafe": config.failsafe,
             "heartbeat_timeout_s": f"{config.heartbeat_timeout:g}",
+            **stand_in_metadata(code),
         }
         activity, all_observers, recorder = session_observers(
             config.record,
@@ -121,11 +135,18 @@ def fly(
             {
                 "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
                 "mission.py": script.text,
+                **code.attachments,
             },
             observers,
+            code.records,
         )
         executive = Executive(
-            catalog, vehicle=vehicle, clock=clock, observers=all_observers, drone=config.drone
+            catalog,
+            vehicle=vehicle,
+            clock=clock,
+            library=code.library,
+            observers=all_observers,
+            drone=config.drone,
         )
         vehicle.tap = executive.bus.publish  # hands over the traffic of the connection too
         try:

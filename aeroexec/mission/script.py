@@ -2,13 +2,17 @@
 
 The script imports `executive_engine_api` and defines `runMission()` (also accepted:
 `run_mission()` or `main()`). The runner provides that module, bound to the executive,
-only while the script runs, and never runs a script that does not compile.
+only while the script runs, and never runs a script that does not compile. A script read
+from a file can import modules from its own directory while it runs (the directory is
+on `sys.path` for that time, and what was imported from it is forgotten afterwards).
 """
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import traceback
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import CodeType
@@ -25,6 +29,9 @@ class MissionScript:
     path: str
     text: str
     code: CodeType
+    #: The directory the script was read from (importable while it runs); None for a
+    #: script that was not read from a file (a recording's attachment).
+    directory: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -51,7 +58,8 @@ def load_mission(path: str | Path) -> MissionScript:
         raise MissionError(f"not UTF-8 text (byte {exc.start})", Mark(file)) from None
     except OSError as exc:
         raise MissionError(f"cannot read: {exc.strerror}", Mark(file)) from None
-    return compile_mission(text, file)
+    script = compile_mission(text, file)
+    return MissionScript(script.path, script.text, script.code, str(p.resolve().parent))
 
 
 def compile_mission(text: str, file: str = "<mission>") -> MissionScript:
@@ -75,25 +83,48 @@ def run_script(script: MissionScript, api: MissionAPI) -> MissionOutcome:
     previous = sys.modules.get(MODULE_NAME)
     sys.modules[MODULE_NAME] = api.as_module()
     try:
-        try:
-            exec(script.code, namespace)
-        except Exception as exc:
-            return _failed(exc)
-        entry = next((namespace[n] for n in ENTRY_POINTS if callable(namespace.get(n))), None)
-        if entry is None:
-            raise MissionError(
-                f"defines none of {', '.join(n + '()' for n in ENTRY_POINTS)}", Mark(script.path)
-            )
-        try:
-            value = entry()
-        except Exception as exc:
-            return _failed(exc)
-        return MissionOutcome(True, value)
+        with _importable(script.directory):
+            try:
+                exec(script.code, namespace)
+            except Exception as exc:
+                return _failed(exc)
+            entry = next((namespace[n] for n in ENTRY_POINTS if callable(namespace.get(n))), None)
+            if entry is None:
+                raise MissionError(
+                    f"defines none of {', '.join(n + '()' for n in ENTRY_POINTS)}",
+                    Mark(script.path),
+                )
+            try:
+                value = entry()
+            except Exception as exc:
+                return _failed(exc)
+            return MissionOutcome(True, value)
     finally:
         if previous is None:
             sys.modules.pop(MODULE_NAME, None)
         else:
             sys.modules[MODULE_NAME] = previous
+
+
+@contextlib.contextmanager
+def _importable(directory: str | None) -> Iterator[None]:
+    """`directory` on `sys.path` while the block runs; afterwards it is removed, and the
+    modules first imported from it are forgotten (the next run imports them afresh)."""
+    if directory is None:
+        yield
+        return
+    before = set(sys.modules)
+    sys.path.insert(0, directory)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(ValueError):
+            sys.path.remove(directory)
+        inside = Path(directory)
+        for name in set(sys.modules) - before:
+            file = getattr(sys.modules.get(name), "__file__", None)
+            if file and Path(file).is_relative_to(inside):
+                del sys.modules[name]
 
 
 def _failed(exc: Exception) -> MissionOutcome:

@@ -7,7 +7,7 @@ checkable.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -16,12 +16,16 @@ from aeroexec import __version__
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
+from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
+from aeroexec.plugins.discovery import STAND_IN, BehaviorSet, standard_set
+from aeroexec.plugins.manifest import METADATA_NAME as CODE_RECORD
+from aeroexec.plugins.manifest import code_manifest
 from aeroexec.vehicles.base import VehicleState
 from aeroexec.vehicles.sim import SimVehicle
 
@@ -37,6 +41,10 @@ class SessionConfig:
     world: str | Path | None = None
     record: str | Path | None = None
     drone: str = "drone1"
+    #: The behaviors to run with (default: the standard library).
+    behaviors: BehaviorSet | None = None
+    #: Run catalog behaviors without an implementation as announced stand-ins.
+    allow_unimplemented: bool = False
 
 
 @dataclass(frozen=True)
@@ -73,6 +81,7 @@ def session_observers(
     metadata: dict[str, str],
     attachments: dict[str, str],
     observers: Iterable[BusObserver],
+    records: Mapping[str, Mapping[str, str]] | None = None,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
     recorder when one is asked for (the caller closes it)."""
@@ -82,9 +91,53 @@ def session_observers(
     if record is not None:
         from aeroexec.recording import Recorder
 
-        recorder = Recorder(record, drone=drone, metadata=metadata, attachments=attachments)
+        recorder = Recorder(
+            record, drone=drone, metadata=metadata, attachments=attachments, records=records
+        )
         everyone.append(recorder)
     return activity, everyone, recorder
+
+
+@dataclass(frozen=True, slots=True)
+class SessionCode:
+    """The behaviors a session runs, and what its recording says about them."""
+
+    behaviors: BehaviorSet
+    #: The `behaviors` metadata record (per behavior: module:Class and source hash).
+    records: dict[str, dict[str, str]]
+    #: The developer's behavior sources, as attachments.
+    attachments: dict[str, str]
+
+    @property
+    def library(self) -> dict[str, type[Behavior]]:
+        return self.behaviors.library()
+
+
+def session_code(
+    catalog: Catalog,
+    behaviors: BehaviorSet | None,
+    allow_unimplemented: bool,
+    announce: Callable[[str], None] | None = None,
+) -> SessionCode:
+    """Compose the behavior library for `catalog`: `BehaviorError` (before anything runs
+    or any file is created) when a catalog behavior has no implementation, unless
+    `allow_unimplemented`; then each stand-in is announced once, here."""
+    chosen = (behaviors or standard_set()).for_catalog(catalog, allow_unimplemented)
+    if announce is not None:
+        for name in chosen.stand_ins:
+            announce(
+                f"warning: {name} has no implementation: a stand-in "
+                f"({STAND_IN.__name__}) ends it with GOAL_ACHIEVED after "
+                f"{STAND_IN.duration:g} s"
+            )
+    manifest = code_manifest(chosen, catalog)
+    return SessionCode(chosen, {CODE_RECORD: manifest.metadata()}, manifest.attachments())
+
+
+def stand_in_metadata(code: SessionCode) -> dict[str, str]:
+    """The session metadata that marks stand-ins (nothing when there are none)."""
+    names = code.behaviors.stand_ins
+    return {"stand_ins": ",".join(names)} if names else {}
 
 
 def simulate(
@@ -95,14 +148,18 @@ def simulate(
     script: MissionScript | None = None,
     catalog_text: str | None = None,
     world: tuple[str, str] | None = None,
+    announce: Callable[[str], None] | None = None,
 ) -> SessionResult:
-    """Run one mission in simulation. Unreadable inputs raise `AeroexecError`s before
-    anything runs (and before any recording file is created).
+    """Run one mission in simulation. Unreadable inputs, and catalog behaviors without
+    an implementation, raise `AeroexecError`s before anything runs (and before any
+    recording file is created).
 
     `catalog`, `script` and `world` ((text, name)) override what `config` names: replay
-    passes the ones recorded in a session's attachments."""
+    passes the ones recorded in a session's attachments. `announce` is told each
+    stand-in (with `config.allow_unimplemented`) once, before the session starts."""
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
+    code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
     world_text, world_file = world if world is not None else _world_text(config.world)
     vehicle = _build_vehicle(world_text, world_file, config.seed)
     metadata = {
@@ -114,18 +171,25 @@ def simulate(
         "catalog": Path(str(config.catalog)).name,
         "mission": Path(script.path).name,
         "world": Path(str(config.world)).name if config.world else "default",
+        **stand_in_metadata(code),
     }
     attachments = {
         "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,
         "mission.py": script.text,
         "world.yaml": world_text,
+        **code.attachments,
     }
     activity, all_observers, recorder = session_observers(
-        config.record, config.drone, metadata, attachments, observers
+        config.record, config.drone, metadata, attachments, observers, code.records
     )
     try:
         executive = Executive(
-            catalog, vehicle=vehicle, clock=SimClock(), observers=all_observers, drone=config.drone
+            catalog,
+            vehicle=vehicle,
+            clock=SimClock(),
+            library=code.library,
+            observers=all_observers,
+            drone=config.drone,
         )
         outcome = run_script(script, MissionAPI(executive))
     finally:

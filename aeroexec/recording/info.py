@@ -16,6 +16,10 @@ from typing import Any
 from aeroexec.recording.reader import ChannelInfo, RawMessage, RecordedAttachment, Recording
 from aeroexec.recording.schemas import MESSAGE_ENCODING
 
+#: The metadata record saying which code implemented each behavior (see
+#: `aeroexec.plugins.manifest`; named here so reading a recording imports no plugin code).
+CODE_RECORD = "behaviors"
+
 _NS = 1_000_000_000
 
 
@@ -130,8 +134,16 @@ class InfoReport:
         lines.append(f"duration:    {self.duration_ns / _NS:.3f} s{span}")
         lines.append(f"messages:    {self.messages} on {len(self.channels)} channels")
         for name, values in self.metadata.items():
+            if name == CODE_RECORD:
+                continue
             pairs = " ".join(f"{k}={v}" for k, v in values.items())
             lines.append(f"metadata:    {name}: {pairs}")
+        code = self.metadata.get(CODE_RECORD, {})
+        if code:
+            # Which code implemented each behavior (module:Class and its source hash).
+            width = max(len(name) for name in code)
+            lines.append("code:")
+            lines.extend(f"  {name:<{width}}  {entry}" for name, entry in code.items())
         for name, media, size in self.attachments:
             lines.append(f"attachment:  {name} ({media}, {size} bytes)")
         if self.channels:

@@ -191,6 +191,11 @@ class RecordScanner:
                 )
                 return
             if isinstance(record, Chunk):
+                if _chunk_size(record) != length:
+                    # A damaged header can declare an empty chunk inside a long record:
+                    # reading on would skip its messages without a word.
+                    self._stop(offset, f"malformed chunk record at byte {offset}")
+                    return
                 try:
                     inner = breakup_chunk(record, validate_crc=self.validate_crcs)
                 except Exception as exc:
@@ -208,6 +213,12 @@ class RecordScanner:
                     return
                 self._stop(offset + len(MAGIC), None, complete=True)
                 return
+
+
+def _chunk_size(chunk: Chunk) -> int:
+    """The body length a chunk's fields account for (start, end, size, crc, compression,
+    records)."""
+    return 8 + 8 + 8 + 4 + 4 + len(chunk.compression.encode()) + 8 + len(chunk.data)
 
 
 def scan_all(path: str | os.PathLike[str]) -> tuple[list[Any], ScanEnd]:

@@ -1,8 +1,9 @@
 """`Recorder`: the bus observer that writes a session to an aeroexec MCAP file.
 
     recorder = Recorder("flight.mcap", drone="drone1", metadata={...},
-                        attachments={"catalog.yaml": text, "mission.py": script})
-    executive = Executive(catalog, observers=[recorder])
+                        attachments={"catalog.yaml": text, "mission.py": script},
+                        records={"behaviors": {...}})
+    executive = Executive(catalog, library=..., observers=[recorder])
     ...
     recorder.close()            # or: with Recorder(...) as recorder: ...
 
@@ -213,6 +214,7 @@ class Recorder:
         metadata: Mapping[str, object] | None = None,
         attachments: Mapping[str, str | bytes] | None = None,
         *,
+        records: Mapping[str, Mapping[str, str]] | None = None,
         flush_messages: int = FLUSH_MESSAGES,
         flush_interval_ns: int = FLUSH_INTERVAL_NS,
         compression: str = "lz4",
@@ -248,7 +250,9 @@ class Recorder:
         self._flushed = 0
         self._closed = False
         try:
-            self._guard(self._start, dict(metadata or {}), dict(attachments or {}))
+            self._guard(
+                self._start, dict(metadata or {}), dict(attachments or {}), dict(records or {})
+            )
         except BaseException:
             self._closed = True
             self._stream.close()
@@ -328,12 +332,20 @@ class Recorder:
         self.close()
 
     # -- internals -----------------------------------------------------------------------
-    def _start(self, metadata: dict[str, object], attachments: dict[str, str | bytes]) -> None:
+    def _start(
+        self,
+        metadata: dict[str, object],
+        attachments: dict[str, str | bytes],
+        records: dict[str, Mapping[str, str]],
+    ) -> None:
         self._writer.start(profile=PROFILE, library=LIBRARY)
         values = {str(k): str(v) for k, v in metadata.items()}
         values.setdefault("aeroexec_version", __version__)
         values.setdefault("drone", self.drone)
         self._writer.add_metadata(METADATA_NAME, values)
+        # Further records (`behaviors`: which code implemented each behavior).
+        for name, record in records.items():
+            self._writer.add_metadata(name, {str(k): str(v) for k, v in record.items()})
         for name, content in attachments.items():
             data = content.encode() if isinstance(content, str) else bytes(content)
             self._writer.add_attachment(

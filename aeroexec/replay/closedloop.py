@@ -24,7 +24,14 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.script import compile_mission
-from aeroexec.mission.session import SessionConfig, session_observers, simulate
+from aeroexec.mission.session import (
+    SessionConfig,
+    session_code,
+    session_observers,
+    simulate,
+    stand_in_metadata,
+)
+from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.replay.collect import OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -69,10 +76,12 @@ def _world(run: RecordedRun, notes: list[str]) -> tuple[str, str]:
 def replay_closed(
     run: RecordedRun,
     catalog: ChosenCatalog,
+    behaviors: BehaviorSet,
     output: str | Path | None,
     horizon_ns: int | None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
-    """Replay `run` in the simulator; the replay's outcome and notes about how."""
+    """Replay `run` in the simulator with `behaviors` (complete for the catalog, stand-ins
+    included); the replay's outcome and notes about how."""
     notes: list[str] = []
     metadata = run.metadata
     seed = _seed(metadata, notes)
@@ -83,7 +92,7 @@ def replay_closed(
     script_text = run.text("mission.py")
     if script_text is None:
         notes.append("no mission.py attachment: replayed the recorded mission/command stream")
-        _replay_commands(run, catalog, output, world, seed, drone, observer)
+        _replay_commands(run, catalog, behaviors, output, world, seed, drone, observer)
     else:
         script = compile_mission(script_text, metadata.get("mission") or "mission.py")
         world_name = world[1]
@@ -94,6 +103,7 @@ def replay_closed(
             world=None if world_name == "default" else world_name,
             record=output,
             drone=drone,
+            behaviors=behaviors,
         )
         with contextlib.redirect_stdout(_Discard()):
             result = simulate(
@@ -113,6 +123,7 @@ def replay_closed(
 def _replay_commands(
     run: RecordedRun,
     catalog: ChosenCatalog,
+    behaviors: BehaviorSet,
     output: str | Path | None,
     world: tuple[str, str],
     seed: int,
@@ -135,14 +146,18 @@ def _replay_commands(
         "replay_of": Path(run.outcome.source).name,
         "time_offset_ns": str(offset),
     }
+    code = session_code(catalog.catalog, behaviors, allow_unimplemented=False)
+    metadata.update(stand_in_metadata(code))
+    attachments = {"catalog.yaml": catalog.text, "world.yaml": world[0], **code.attachments}
     _, observers, recorder = session_observers(
-        output, drone, metadata, {"catalog.yaml": catalog.text, "world.yaml": world[0]}, [observer]
+        output, drone, metadata, attachments, [observer], code.records
     )
     try:
         executive = Executive(
             catalog.catalog,
             vehicle=vehicle,
             clock=SimClock(),
+            library=code.library,
             observers=observers,
             drone=drone,
         )

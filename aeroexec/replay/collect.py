@@ -20,6 +20,7 @@ from typing import Any
 
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.plugins.manifest import METADATA_NAME as CODE_RECORD
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.replay.outcome import (
     ACTIVATIONS,
@@ -351,11 +352,14 @@ class RecordedRun:
         metadata: dict[str, str],
         attachments: dict[str, bytes],
         profile: str,
+        code: dict[str, str] | None = None,
     ) -> None:
         self.outcome = outcome
         self.metadata = metadata
         self.attachments = attachments
         self.profile = profile
+        #: The `behaviors` record: which code implemented each behavior ({} if unsaid).
+        self.code = dict(code or {})
 
     def text(self, name: str) -> str | None:
         data = self.attachments.get(name)
@@ -403,7 +407,8 @@ def read_run(
         metadata=metadata,
         notes=tuple(notes),
     )
-    return RecordedRun(outcome, metadata, dict(summary.attachments), source.profile)
+    code = summary.metadata.get(CODE_RECORD, {})
+    return RecordedRun(outcome, metadata, dict(summary.attachments), source.profile, code)
 
 
 def extract_outcome(path: str | os.PathLike[str], horizon_ns: int | None = None) -> RunOutcome:

@@ -23,6 +23,8 @@ from typing import Any
 from aeroexec.bags.bagfile import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
+from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
@@ -44,6 +46,9 @@ class ReplayOptions:
     #: Write the replay to this MCAP file.
     output: str | None = None
     tolerance: Tolerance = field(default_factory=Tolerance)
+    #: Where the behaviors come from (default: the standard library only). Plain data,
+    #: so each worker process discovers the same set.
+    behaviors: BehaviorSources | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -59,6 +64,8 @@ class ReplayResult:
     error: str | None = None
     output: str | None = None
     notes: tuple[str, ...] = ()
+    #: Behaviors whose code is not the code the recording ran (class or source changed).
+    code_changes: tuple[str, ...] = ()
 
     @property
     def equal(self) -> bool:
@@ -75,6 +82,7 @@ class ReplayResult:
             "output": self.output,
             "compared_commands": self.diff.compared if self.diff else 0,
             "differences": [d.as_dict() for d in self.diff.differences] if self.diff else [],
+            "code_changes": list(self.code_changes),
             "notes": list(self.notes),
         }
 
@@ -123,11 +131,17 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
         )
     mode = choose_mode(run, options.mode)
     catalog = choose_catalog(run, options.catalog)
+    behaviors = choose_behaviors(run, catalog, options.behaviors)
     if mode is Mode.closed:
-        replayed, how = replay_closed(run, catalog, options.output, horizon)
+        replayed, how = replay_closed(run, catalog, behaviors, options.output, horizon)
     else:
-        replayed, how = replay_open(path, run, catalog, options.output, horizon)
+        replayed, how = replay_open(path, run, catalog, behaviors, options.output, horizon)
     notes.extend(how)
+    changed = code_changes(run.code, code_manifest(behaviors, catalog.catalog).metadata())
+    if not run.code:
+        notes.append("the recording does not say which behavior code ran: code changes unknown")
+    if behaviors.stand_ins:
+        notes.append(f"stand-ins, as in the recording: {', '.join(behaviors.stand_ins)}")
     diff = diff_outcomes(
         run.outcome,
         replayed,
@@ -145,7 +159,25 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
         diff=diff,
         output=str(options.output) if options.output is not None else None,
         notes=tuple(notes),
+        code_changes=changed,
     )
+
+
+def choose_behaviors(
+    run: RecordedRun, catalog: ChosenCatalog, sources: BehaviorSources | None
+) -> BehaviorSet:
+    """The behaviors to replay with: the current code (never code the recording
+    carries). A behavior the recording ran as a stand-in is a stand-in again; any other
+    catalog behavior without an implementation is a `BehaviorError`."""
+    found = discovered(sources) if sources is not None else standard_set()
+    recorded_stand_ins = [
+        name
+        for name, text in run.code.items()
+        if CodeEntry.parse(text).stand_in and name not in found.implementations
+    ]
+    if recorded_stand_ins:
+        found = found.with_stand_ins(recorded_stand_ins)
+    return found.for_catalog(catalog.catalog)
 
 
 def replay_file(path: str, options: ReplayOptions) -> ReplayResult:

@@ -17,6 +17,7 @@ from aeroexec import __version__
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.session import session_observers
+from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.replay.closedloop import ChosenCatalog
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
@@ -30,10 +31,12 @@ def replay_open(
     path: str | Path,
     run: RecordedRun,
     catalog: ChosenCatalog,
+    behaviors: BehaviorSet,
     output: str | Path | None,
     horizon_ns: int | None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
-    """Replay `run` (read from `path`) open loop; the replay's outcome and notes."""
+    """Replay `run` (read from `path`) open loop; the replay's outcome and notes.
+    `behaviors` answer the situation checks the recording has no answer for."""
     notes: list[str] = []
     recorded = run.outcome
     offset = recorded.start_ns or 0
@@ -66,7 +69,7 @@ def replay_open(
             catalog.catalog,
             vehicle=vehicle,
             clock=clock,
-            library=stand_in_library(catalog.catalog, script),
+            library=stand_in_library(catalog.catalog, script, behaviors.library()),
             observers=observers,
             drone=drone,
         )

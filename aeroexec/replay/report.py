@@ -43,7 +43,8 @@ def replay_header(result: ReplayResult) -> str:
     if result.diff is None:
         return f"{result.recording}: {mode}: error: {result.error}"
     catalog = f"its recorded {result.catalog}" if result.catalog_recorded else result.catalog
-    return f"{result.recording}: {mode} with {catalog}: {_verdict(result.diff)}"
+    changed = "; code changed" if result.code_changes else ""
+    return f"{result.recording}: {mode} with {catalog}: {_verdict(result.diff)}{changed}"
 
 
 def replay_summary(results: Sequence[ReplayResult]) -> str:
@@ -65,6 +66,7 @@ def replay_text(results: Sequence[ReplayResult]) -> str:
             continue
         lines.append(replay_header(result))
         lines.extend(_diff_lines(result.diff, result.notes))
+        lines.extend(f"  code changed: {change}" for change in result.code_changes)
         if result.output:
             lines.append(f"  replay written to {result.output}")
     if len(results) > 1:
@@ -100,11 +102,12 @@ def replay_junit(results: Sequence[ReplayResult], suite: str = "aeroexec replay"
             error = ET.SubElement(case, "error", {"message": result.error or "", "type": "input"})
             error.text = replay_header(result)
             continue
+        notes = (*result.notes, *(f"code changed: {c}" for c in result.code_changes))
         if not result.diff.equal:
             failures += 1
-            _failure(case, result.diff, result.notes, replay_header(result))
-        elif result.notes:
-            ET.SubElement(case, "system-out").text = "\n".join(result.notes)
+            _failure(case, result.diff, notes, replay_header(result))
+        elif notes:
+            ET.SubElement(case, "system-out").text = "\n".join(notes)
     return _finish(root, failures, errors)
 
 

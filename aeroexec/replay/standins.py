@@ -5,8 +5,9 @@ the recorded command; the stand-in then
 
 * answers `check_situation` with the recorded answer of that activation (the situation
   depended on the real world, which open loop cannot rebuild); when none was recorded
-  (the activation was refused before the check), it asks the real behavior class of the
-  standard library, against the beliefs fed from the recorded vehicle state;
+  (the activation was refused before the check), it asks the real behavior class being
+  replayed (the standard library's or a developer's), against the beliefs fed from the
+  recorded vehicle state;
 * ends with the recorded code at the recorded time after its start, for activations that
   ended by themselves (GOAL_ACHIEVED, WRONG_PROGRESS, ASSUMPTION_CONFLICT,
   PROCESS_FAILURE). Activations that were interrupted, timed out or still running are
@@ -107,14 +108,10 @@ class StandIn(Behavior):
 
 
 def stand_in_library(
-    catalog: Catalog, script: Script, real: Mapping[str, type[Behavior]] | None = None
+    catalog: Catalog, script: Script, real: Mapping[str, type[Behavior]]
 ) -> dict[str, type[Behavior]]:
     """One stand-in class per catalog behavior; each inherits `check_situation` from the
-    real class of `real` (default: the standard library) when there is one."""
-    if real is None:
-        from aeroexec.behaviors import STANDARD_LIBRARY
-
-        real = STANDARD_LIBRARY
+    real class of `real` (the behaviors being replayed) when there is one."""
     library: dict[str, type[Behavior]] = {}
     for name in catalog.behaviors:
         base = real.get(name)

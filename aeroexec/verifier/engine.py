@@ -5,6 +5,7 @@ from __future__ import annotations
 import glob
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from aeroexec.catalog.loader import read_catalog
 from aeroexec.catalog.model import Catalog
@@ -17,7 +18,11 @@ from aeroexec.verifier.missions import (
     expand_mission_paths,
     read_mission,
 )
-from aeroexec.verifier.registry import catalog_checks
+from aeroexec.verifier.registry import catalog_checks, code_checks
+from aeroexec.verifier.witness_run import realize_findings
+
+if TYPE_CHECKING:
+    from aeroexec.plugins.discovery import BehaviorSet
 
 CatalogInput = str | Path | Catalog
 
@@ -39,10 +44,16 @@ def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
     return result
 
 
-def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[Finding]:
+def check_catalog(
+    catalog: Catalog,
+    codes: Iterable[str] | None = None,
+    behaviors: BehaviorSet | None = None,
+) -> list[Finding]:
     """The loader's diagnostics plus every catalog rule's findings (unsorted).
 
     `codes` restricts the rules that run (loader diagnostics always pass through).
+    With `behaviors` (the implementations the project runs), the catalog is checked
+    against them too (AX8xx).
     """
     wanted = None if codes is None else set(codes)
     findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
@@ -51,7 +62,13 @@ def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[
         if wanted is not None and rule.code not in wanted:
             continue
         assert rule.check is not None
-        findings.extend(rule.check(graphs))
+        findings.extend(rule.check(graphs))  # type: ignore[call-arg]  (a catalog rule)
+    if behaviors is not None:
+        for rule in code_checks():
+            if wanted is None or rule.code in wanted:
+                findings.extend(rule.check(graphs, behaviors))  # type: ignore[call-arg]
+        # Witnesses as the real behaviors make them happen (TAKE_OFF first, ...).
+        findings = realize_findings(catalog, findings, behaviors.library())
     return findings
 
 
@@ -68,10 +85,11 @@ def verify_catalog_file(path: str | Path) -> Report:
 def verify(
     catalogs: Sequence[CatalogInput],
     missions: Sequence[str | Path | MissionScript] = (),
+    behaviors: BehaviorSet | None = None,
 ) -> Report:
     """Verify catalogs (paths or loaded catalogs) and the mission scripts (paths, glob
     patterns or parsed scripts) that use them; every mission is checked against every
-    catalog.
+    catalog, and with `behaviors` every catalog against that code.
 
     Every input is read before any rule runs, so unreadable input raises
     (`CatalogError` / `MissionError`, exit code 2 at the CLI) before any output.
@@ -82,7 +100,7 @@ def verify(
     scripts += [read_mission(path) for path in expand_mission_paths(patterns)]
     findings: list[Finding] = []
     for catalog in loaded:
-        findings.extend(check_catalog(catalog))
+        findings.extend(check_catalog(catalog, behaviors=behaviors))
         note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
         for script in scripts:
             findings.extend(check_mission(script, catalog, note))

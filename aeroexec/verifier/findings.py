@@ -23,6 +23,12 @@ class Step:
     def to_dict(self) -> dict[str, Any]:
         return {"activate": self.activate, "arguments": dict(self.arguments)}
 
+    def describe(self) -> str:
+        if not self.arguments:
+            return self.activate
+        shown = ", ".join(f"{name}={value!r}" for name, value in self.arguments)
+        return f"{self.activate}({shown})"
+
 
 class Outcome(str, Enum):
     """What the executive does when a witness is replayed."""
@@ -42,18 +48,27 @@ class Witness:
 
     steps: tuple[Step, ...]
     outcome: Outcome
+    #: Behaviors run to their end first, so that the steps' situations hold for the
+    #: real behaviors (TAKE_OFF before a motion behavior); see `witness_run`.
+    setup: tuple[Step, ...] = ()
+    #: Why the real behaviors could not reproduce it, when they could not (then the
+    #: witness holds with stand-in behaviors only).
+    caveat: str = ""
 
     def to_list(self) -> list[dict[str, Any]]:
-        return [step.to_dict() for step in self.steps]
+        setup = [{**step.to_dict(), "until_end": True} for step in self.setup]
+        return setup + [step.to_dict() for step in self.steps]
 
     def describe(self) -> str:
+        caveat = f" ({self.caveat})" if self.caveat else ""
         if self.outcome is Outcome.INITIATION_FAILS:
-            return "initiation fails before any activation"
+            return f"initiation fails before any activation{caveat}"
         names = [s.activate for s in self.steps]
-        sequence = ", then ".join(f"activate {n}" for n in names)
+        prefix = "".join(f"run {s.describe()} to its end, then " for s in self.setup)
+        sequence = prefix + ", then ".join(f"activate {s.describe()}" for s in self.steps)
         if self.outcome is Outcome.REJECTED:
-            return f"{sequence}: the activation of {names[-1]} is rejected"
-        return f"{sequence}: all of {', '.join(dict.fromkeys(names))} stay active"
+            return f"{sequence}: the activation of {names[-1]} is rejected{caveat}"
+        return f"{sequence}: all of {', '.join(dict.fromkeys(names))} stay active{caveat}"
 
 
 @dataclass(frozen=True, slots=True)

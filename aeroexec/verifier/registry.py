@@ -5,11 +5,13 @@ Three kinds of entries:
 * `loader` — diagnostics the catalog loader already emits (AX1xx, from
   `aeroexec.catalog.codes`); the verifier passes them through and documents them here;
 * `catalog` — rules over a loaded catalog and its graphs (AX2xx-AX6xx);
-* `mission` — checks of mission scripts against a catalog (AX7xx).
+* `mission` — checks of mission scripts against a catalog (AX7xx);
+* `code` — the catalog against the behavior implementations that would run it (AX8xx,
+  only when the project declares its behaviors; `aeroexec.verifier.rules.code`).
 
 Codes by range: AX1xx loading, AX2xx references, AX3xx capability consistency,
 AX4xx incompatibility, AX5xx start order, AX6xx behavior properties (recurrent/timeout,
-argument specs), AX7xx missions.
+argument specs), AX7xx missions, AX8xx catalog against code.
 """
 
 from __future__ import annotations
@@ -25,11 +27,13 @@ from aeroexec.catalog.model import Severity
 from aeroexec.verifier.findings import Finding
 
 if TYPE_CHECKING:
+    from aeroexec.plugins.discovery import BehaviorSet
     from aeroexec.verifier.graphs import CatalogGraphs
 
 CatalogCheck = Callable[["CatalogGraphs"], Iterable[Finding]]
+CodeCheck = Callable[["CatalogGraphs", "BehaviorSet"], Iterable[Finding]]
 
-KINDS = ("loader", "catalog", "mission")
+KINDS = ("loader", "catalog", "mission", "code")
 
 AREAS = {
     "AX1": "Loading (reported by the catalog loader)",
@@ -39,6 +43,7 @@ AREAS = {
     "AX5": "Start order",
     "AX6": "Behavior properties",
     "AX7": "Missions",
+    "AX8": "Catalog against code",
 }
 
 
@@ -51,7 +56,7 @@ class Rule:
     #: One paragraph: what it is, how it fails in flight, how to fix it.
     doc: str
     kind: str
-    check: CatalogCheck | None = None
+    check: CatalogCheck | CodeCheck | None = None
     #: Findings of this rule carry a witness (an activation sequence) when one exists.
     witness: bool = False
 
@@ -90,6 +95,18 @@ def catalog_rule(
 
     def decorate(check: CatalogCheck) -> CatalogCheck:
         register(Rule(code, name, severity, " ".join(doc.split()), "catalog", check, witness))
+        return check
+
+    return decorate
+
+
+def code_rule(
+    code: str, name: str, severity: Severity, doc: str
+) -> Callable[[CodeCheck], CodeCheck]:
+    """Decorator: register a check of a catalog against behavior implementations."""
+
+    def decorate(check: CodeCheck) -> CodeCheck:
+        register(Rule(code, name, severity, " ".join(doc.split()), "code", check))
         return check
 
     return decorate
@@ -147,5 +164,11 @@ def suggest_code(code: str) -> str:
 
 def catalog_checks() -> Iterator[Rule]:
     for rule in all_rules("catalog"):
+        if rule.check is not None:
+            yield rule
+
+
+def code_checks() -> Iterator[Rule]:
+    for rule in all_rules("code"):
         if rule.check is not None:
             yield rule

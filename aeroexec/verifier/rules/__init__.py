@@ -3,6 +3,7 @@
 from aeroexec.verifier.rules import (  # noqa: F401  (registration on import)
     behavior_properties,
     capabilities,
+    code,
     incompatibility,
     references,
     start_order,

@@ -1,0 +1,173 @@
+"""AX8xx: the catalog against the behavior implementations that would run it.
+
+These rules run when the project declares its behaviors (`--behaviors`, a `behaviors`
+key in `[tool.aeroexec]` / aeroexec.toml, or an installed `aeroexec.behaviors` entry
+point): then `run` uses exactly that set, and a mismatch is a run-time failure found
+before flight. Argument names are compared as behaviors declare them
+(`Behavior.argument_names`), statically: no behavior code runs for these checks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+from aeroexec.catalog.model import BehaviorDescriptor, Severity
+from aeroexec.plugins.discovery import BehaviorSet, Implementation
+from aeroexec.verifier.findings import Finding
+from aeroexec.verifier.graphs import CatalogGraphs
+from aeroexec.verifier.registry import code_rule
+from aeroexec.verifier.suggest import Suggester
+
+E = Severity.ERROR
+W = Severity.WARNING
+I = Severity.INFO  # noqa: E741  (the severities read as E, W, I)
+
+
+def _where(implementation: Implementation) -> str:
+    mark = implementation.mark
+    return f"{mark.file}:{mark.line}" if mark.line else mark.file
+
+
+def _implemented(
+    graphs: CatalogGraphs, behaviors: BehaviorSet
+) -> Iterator[tuple[BehaviorDescriptor, Implementation]]:
+    for definition in graphs.behavior_defs:
+        if not definition.effective:
+            continue
+        implementation = behaviors.implementations.get(definition.item.name)
+        if implementation is not None and not implementation.stand_in:
+            yield definition.item, implementation
+
+
+@code_rule(
+    "AX801",
+    "no-implementation",
+    E,
+    """A catalog behavior has no implementation among the project's behaviors
+    (`--behaviors`, `[tool.aeroexec] behaviors`, entry points, the standard library). In
+    flight: `aeroexec run` and `aeroexec fly` refuse the catalog; with
+    `--allow-unimplemented` the behavior is a stand-in that just succeeds after 1 s, so a
+    typo in a name flies as a success. Fix: implement it (a `Behavior` subclass with this
+    `name`), add the module to the project's behaviors, or correct the name.""",
+)
+def no_implementation(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        if not definition.effective or behavior.name in behaviors.implementations:
+            continue
+        yield graphs.finding(
+            "AX801",
+            E,
+            f"{behavior.name} has no implementation (looked in: {'; '.join(behaviors.searched)})",
+            behavior.mark,
+            (behavior.name,),
+        )
+
+
+@code_rule(
+    "AX802",
+    "implementation-not-in-catalog",
+    W,
+    """One of the project's own behavior classes (not the standard library's) implements
+    a name the catalog does not define. In flight: nothing can activate it, and a mission
+    asking for the catalog's spelling gets an unknown behavior or a stand-in. Usually a
+    misspelt `name` or a catalog entry that was never written. Fix: correct the `name`
+    or add the behavior to the catalog.""",
+)
+def implementation_not_in_catalog(
+    graphs: CatalogGraphs, behaviors: BehaviorSet
+) -> Iterator[Finding]:
+    names = graphs.catalog.behaviors
+    suggester = Suggester(names)
+    section = graphs.catalog.section_marks.get("behavior_descriptors", graphs.top_mark)
+    for implementation in behaviors.user():
+        if implementation.name in names:
+            continue
+        yield graphs.finding(
+            "AX802",
+            W,
+            f"{implementation.reference} ({_where(implementation)}) implements "
+            f"{implementation.name}, which this catalog does not define"
+            f"{suggester.hint(implementation.name)}",
+            section,
+            (implementation.name,),
+        )
+
+
+@code_rule(
+    "AX803",
+    "argument-not-read",
+    E,
+    """A catalog argument is not among the argument names the behavior's implementation
+    declares it reads (`argument_names`; names match regardless of letter case). In
+    flight: the specialist accepts the argument, the behavior never sees it, and the
+    activation fails or does something else (the standard GO_TO_POINT reads
+    `COORDINATES`; a catalog that calls it `POSITION` passes every check and fails at
+    run time). Fix: rename the catalog argument to what the code reads, or make the code
+    read it.""",
+)
+def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
+    for behavior, implementation in _implemented(graphs, behaviors):
+        declared = implementation.cls.argument_names
+        if declared is None:
+            continue
+        reads = {name.casefold() for name in declared}
+        for spec in behavior.arguments:
+            if spec.name.casefold() in reads:
+                continue
+            listed = ", ".join(declared) if declared else "no arguments"
+            yield graphs.finding(
+                "AX803",
+                E,
+                f"{behavior.name}: argument {spec.name} is not read by "
+                f"{implementation.reference}, which reads {listed}",
+                spec.mark if spec.mark.line else behavior.mark,
+                (behavior.name, spec.name),
+            )
+
+
+@code_rule(
+    "AX804",
+    "argument-not-in-catalog",
+    I,
+    """The behavior's implementation declares an argument the catalog does not define.
+    In flight: no mission can pass it (the specialist refuses unknown arguments), so the
+    behavior always runs with its default. Often deliberate (an optional argument the
+    catalog does not expose); a misspelling otherwise. Fix: add it to the catalog's
+    arguments if missions should set it.""",
+)
+def argument_not_in_catalog(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
+    for behavior, implementation in _implemented(graphs, behaviors):
+        for name in implementation.cls.argument_names or ():
+            if behavior.argument(name) is not None:
+                continue
+            yield graphs.finding(
+                "AX804",
+                I,
+                f"{behavior.name}: {implementation.reference} reads argument {name}, which "
+                "the catalog does not define: no mission can pass it",
+                behavior.mark,
+                (behavior.name, name),
+            )
+
+
+@code_rule(
+    "AX805",
+    "arguments-not-declared",
+    I,
+    """The catalog gives a behavior arguments, and its implementation does not declare
+    which argument names it reads (`argument_names`), so the verifier cannot check them.
+    In flight: a catalog argument the code does not read goes unnoticed until the
+    behavior misbehaves. Fix: set `argument_names = ("NAME", ...)` on the class.""",
+)
+def arguments_not_declared(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
+    for behavior, implementation in _implemented(graphs, behaviors):
+        if implementation.cls.argument_names is None and behavior.arguments:
+            yield graphs.finding(
+                "AX805",
+                I,
+                f"{behavior.name}: {implementation.reference} ({_where(implementation)}) "
+                "does not declare argument_names: its arguments are not checked",
+                behavior.mark,
+                (behavior.name,),
+            )
