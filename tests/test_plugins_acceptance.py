@@ -282,7 +282,7 @@ def test_behaviors_lists_the_package_and_verify_checks_the_catalog_against_it(
     checked = CliRunner().invoke(app, ["verify"])
     assert checked.exit_code == 1
     assert (
-        "error AX803 SURVEY: argument POSITION is not read by dronebehaviors.survey:Survey, "
+        "error AX903 SURVEY: argument POSITION is not read by dronebehaviors.survey:Survey, "
         "which reads SIDE" in checked.stdout
     )
     shutil.rmtree(project / "dronebehaviors")

@@ -20,8 +20,8 @@ def standard_library_only() -> BehaviorSet:
 def test_position_is_not_what_go_to_point_reads() -> None:
     catalog = read_catalog(REAL / QC.format("451fc45"))
     findings = check_catalog(catalog, behaviors=standard_library_only())
-    ax803 = [f for f in findings if f.rule == "AX803"]
-    assert [(f.line, f.column, f.message) for f in ax803] == [
+    ax903 = [f for f in findings if f.rule == "AX903"]
+    assert [(f.line, f.column, f.message) for f in ax903] == [
         (
             17,
             9,
@@ -29,7 +29,7 @@ def test_position_is_not_what_go_to_point_reads() -> None:
             "which reads COORDINATES, RELATIVE_COORDINATES",
         )
     ]
-    assert {f.subjects[0] for f in findings if f.rule == "AX801"} == {
+    assert {f.subjects[0] for f in findings if f.rule == "AX901"} == {
         "KEEP_MOVING",
         "SELF_LOCALIZE_BY_ODOMETRY",
         "SELF_LOCALIZE_BY_VISUAL_MARKER",
@@ -39,9 +39,9 @@ def test_position_is_not_what_go_to_point_reads() -> None:
 def test_lower_case_spelling_is_what_go_to_point_reads() -> None:
     catalog = read_catalog(REAL / QC.format("85c888c"))
     findings = check_catalog(catalog, behaviors=standard_library_only())
-    assert not [f for f in findings if f.rule == "AX803" and "GO_TO_POINT" in f.subjects]
+    assert not [f for f in findings if f.rule == "AX903" and "GO_TO_POINT" in f.subjects]
 
 
 def test_without_a_declared_behavior_set_no_code_rule_runs() -> None:
     report = verify([REAL / QC.format("451fc45")])
-    assert not [f for f in report.findings if f.rule.startswith("AX8")]
+    assert not [f for f in report.findings if f.rule.startswith("AX9")]

@@ -1,7 +1,7 @@
 """Every rule of the registry has a fixture that triggers it, at the places the fixture
 marks with `# expect CODE [at TOKEN]` comments (line, and the column where TOKEN starts),
 and a clean near-miss fixture where it stays silent. The catalog-against-code rules
-(AX8xx) check their fixtures against the behaviors of `code_behaviors.py`."""
+(AX9xx) check their fixtures against the behaviors of `code_behaviors.py`."""
 
 from __future__ import annotations
 

@@ -151,5 +151,5 @@ def test_verify_completes_witnesses_only_for_a_project_with_behaviors(
     assert result.exit_code == 1
     assert "witness: run TAKE_OFF to its end, then activate GO_TO_POINT_ANGLE" in result.stdout
     # ... and checks the catalog against the code: these behaviors have none here.
-    assert "error AX801 GO_TO_POINT_ANGLE has no implementation (looked in: " in result.stdout
-    assert "AX801" not in plain.stdout
+    assert "error AX901 GO_TO_POINT_ANGLE has no implementation (looked in: " in result.stdout
+    assert "AX901" not in plain.stdout

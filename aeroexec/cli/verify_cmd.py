@@ -27,7 +27,7 @@ read before any check runs: an unreadable one stops the run with exit code 2.
 
 When the project declares its behaviors (-b/--behaviors, `behaviors` in
 [tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
-catalog is also checked against that code (AX8xx: behaviors without an implementation,
+catalog is also checked against that code (AX9xx: behaviors without an implementation,
 argument names the code does not read), and witnesses are completed to happen with the
 real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catalog.
 

@@ -19,7 +19,7 @@ do not edit by hand. `aeroexec verify --explain CODE` prints the same text.
 
 Codes by range: AX1xx are reported by the catalog loader and passed through by the
 verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility;
-AX5xx start order; AX6xx behavior properties; AX7xx missions (`--mission`); AX8xx the
+AX5xx start order; AX6xx behavior properties; AX7xx missions (`--mission`); AX9xx the
 catalog against the behavior code that runs it (when the project declares its behaviors:
 `--behaviors`, `[tool.aeroexec] behaviors`, entry points).
 Rules marked *witness* attach, where one exists, the shortest activation sequence that

@@ -53,7 +53,7 @@ def check_catalog(
 
     `codes` restricts the rules that run (loader diagnostics always pass through).
     With `behaviors` (the implementations the project runs), the catalog is checked
-    against them too (AX8xx).
+    against them too (AX9xx).
     """
     wanted = None if codes is None else set(codes)
     findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]

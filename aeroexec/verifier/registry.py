@@ -6,12 +6,12 @@ Three kinds of entries:
   `aeroexec.catalog.codes`); the verifier passes them through and documents them here;
 * `catalog` — rules over a loaded catalog and its graphs (AX2xx-AX6xx);
 * `mission` — checks of mission scripts against a catalog (AX7xx);
-* `code` — the catalog against the behavior implementations that would run it (AX8xx,
+* `code` — the catalog against the behavior implementations that would run it (AX9xx,
   only when the project declares its behaviors; `aeroexec.verifier.rules.code`).
 
 Codes by range: AX1xx loading, AX2xx references, AX3xx capability consistency,
 AX4xx incompatibility, AX5xx start order, AX6xx behavior properties (recurrent/timeout,
-argument specs), AX7xx missions, AX8xx catalog against code.
+argument specs), AX7xx missions, AX9xx catalog against code.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ AREAS = {
     "AX5": "Start order",
     "AX6": "Behavior properties",
     "AX7": "Missions",
-    "AX8": "Catalog against code",
+    "AX9": "Catalog against code",
 }
 
 

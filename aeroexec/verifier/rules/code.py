@@ -1,4 +1,4 @@
-"""AX8xx: the catalog against the behavior implementations that would run it.
+"""AX9xx: the catalog against the behavior implementations that would run it.
 
 These rules run when the project declares its behaviors (`--behaviors`, a `behaviors`
 key in `[tool.aeroexec]` / aeroexec.toml, or an installed `aeroexec.behaviors` entry
@@ -40,7 +40,7 @@ def _implemented(
 
 
 @code_rule(
-    "AX801",
+    "AX901",
     "no-implementation",
     E,
     """A catalog behavior has no implementation among the project's behaviors
@@ -56,7 +56,7 @@ def no_implementation(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
         if not definition.effective or behavior.name in behaviors.implementations:
             continue
         yield graphs.finding(
-            "AX801",
+            "AX901",
             E,
             f"{behavior.name} has no implementation (looked in: {'; '.join(behaviors.searched)})",
             behavior.mark,
@@ -65,7 +65,7 @@ def no_implementation(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
 
 
 @code_rule(
-    "AX802",
+    "AX902",
     "implementation-not-in-catalog",
     W,
     """One of the project's own behavior classes (not the standard library's) implements
@@ -84,7 +84,7 @@ def implementation_not_in_catalog(
         if implementation.name in names:
             continue
         yield graphs.finding(
-            "AX802",
+            "AX902",
             W,
             f"{implementation.reference} ({_where(implementation)}) implements "
             f"{implementation.name}, which this catalog does not define"
@@ -95,7 +95,7 @@ def implementation_not_in_catalog(
 
 
 @code_rule(
-    "AX803",
+    "AX903",
     "argument-not-read",
     E,
     """A catalog argument is not among the argument names the behavior's implementation
@@ -117,7 +117,7 @@ def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
                 continue
             listed = ", ".join(declared) if declared else "no arguments"
             yield graphs.finding(
-                "AX803",
+                "AX903",
                 E,
                 f"{behavior.name}: argument {spec.name} is not read by "
                 f"{implementation.reference}, which reads {listed}",
@@ -127,7 +127,7 @@ def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
 
 
 @code_rule(
-    "AX804",
+    "AX904",
     "argument-not-in-catalog",
     I,
     """The behavior's implementation declares an argument the catalog does not define.
@@ -142,7 +142,7 @@ def argument_not_in_catalog(graphs: CatalogGraphs, behaviors: BehaviorSet) -> It
             if behavior.argument(name) is not None:
                 continue
             yield graphs.finding(
-                "AX804",
+                "AX904",
                 I,
                 f"{behavior.name}: {implementation.reference} reads argument {name}, which "
                 "the catalog does not define: no mission can pass it",
@@ -152,7 +152,7 @@ def argument_not_in_catalog(graphs: CatalogGraphs, behaviors: BehaviorSet) -> It
 
 
 @code_rule(
-    "AX805",
+    "AX905",
     "arguments-not-declared",
     I,
     """The catalog gives a behavior arguments, and its implementation does not declare
@@ -164,7 +164,7 @@ def arguments_not_declared(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Ite
     for behavior, implementation in _implemented(graphs, behaviors):
         if implementation.cls.argument_names is None and behavior.arguments:
             yield graphs.finding(
-                "AX805",
+                "AX905",
                 I,
                 f"{behavior.name}: {implementation.reference} ({_where(implementation)}) "
                 "does not declare argument_names: its arguments are not checked",
