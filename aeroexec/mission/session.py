@@ -27,6 +27,7 @@ from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
+    from aeroexec.vehicles.world import World
 
 
 @dataclass(frozen=True)
@@ -73,16 +74,20 @@ def session_observers(
     metadata: dict[str, str],
     attachments: dict[str, str],
     observers: Iterable[BusObserver],
+    world: World | None = None,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
-    recorder when one is asked for (the caller closes it)."""
+    recorder when one is asked for (the caller closes it). `world`: what the vehicle
+    flies in, drawn in the recording's 3D scene."""
     activity = ActivityLog()
     everyone: list[BusObserver] = [activity, *observers]
     recorder = None
     if record is not None:
         from aeroexec.recording import Recorder
 
-        recorder = Recorder(record, drone=drone, metadata=metadata, attachments=attachments)
+        recorder = Recorder(
+            record, drone=drone, metadata=metadata, attachments=attachments, world=world
+        )
         everyone.append(recorder)
     return activity, everyone, recorder
 
@@ -121,7 +126,7 @@ def simulate(
         "world.yaml": world_text,
     }
     activity, all_observers, recorder = session_observers(
-        config.record, config.drone, metadata, attachments, observers
+        config.record, config.drone, metadata, attachments, observers, vehicle.world
     )
     try:
         executive = Executive(

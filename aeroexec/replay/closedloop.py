@@ -136,7 +136,12 @@ def _replay_commands(
         "time_offset_ns": str(offset),
     }
     _, observers, recorder = session_observers(
-        output, drone, metadata, {"catalog.yaml": catalog.text, "world.yaml": world[0]}, [observer]
+        output,
+        drone,
+        metadata,
+        {"catalog.yaml": catalog.text, "world.yaml": world[0]},
+        [observer],
+        vehicle.world,
     )
     try:
         executive = Executive(
