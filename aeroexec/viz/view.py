@@ -178,15 +178,8 @@ def _convert(
         log_world(stream, layout, world)
     log_vehicle_body(stream, layout, color)
     survey = recording.survey()
-    has_pose = any(c.topic.endswith("/vehicle/pose") for c in survey.channels.values())
     converter = SessionConverter(
-        stream,
-        writer,
-        layout,
-        origin_ns=session_origin_ns(recording),
-        world=world,
-        color=color,
-        pose_from_state=not has_pose,
+        stream, writer, layout, origin_ns=session_origin_ns(recording), world=world, color=color
     )
     with progress(recording.name, survey.message_count) as advance:
         count = 0
