@@ -4,6 +4,7 @@ read by aeroexec's reader and by the `mcap` library's."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections import Counter
 from dataclasses import dataclass, field
@@ -582,3 +583,28 @@ def test_incomplete_recording_is_shown_up_to_the_damage(
     assert not source.complete and source.problem
     rrd = read_rrd(tmp_path / "cut.rrd")
     assert len(rrd.rows["/trajectory"]) == len(states)
+
+
+def test_the_first_release_recording_still_converts(tmp_path: Path) -> None:
+    """recordings/appendix_c-v0.1.0.mcap: top-level calls with `"parent_seq": null` and
+    the old `vehicle/pose` channel: the same call tree and pose track as new files."""
+    old = Path(__file__).resolve().parent.parent / "recordings" / "appendix_c-v0.1.0.mcap"
+    with open(old, "rb") as stream:
+        raw_roots = sum(
+            1
+            for schema, _, message in make_reader(stream).iter_messages()
+            if schema is not None
+            and schema.name == "aeroexec.ServiceCall"
+            and json.loads(message.data)["parent_seq"] is None
+        )
+    calls = _calls(old)
+    assert raw_roots > 0
+    assert sum(c.parent_seq is None for c in calls) == raw_roots
+    write_view([old], tmp_path / "old.rrd")
+    rrd = read_rrd(tmp_path / "old.rrd")
+    depths = _depths(calls)
+    assert max(depths.values()) >= 3
+    for row in rrd.rows["/calls"]:
+        text = _single(row["TextLog:text"])
+        assert len(text) - len(text.lstrip(" ")) == 2 * depths[row["seq"]]
+    assert len(rrd.rows["/vehicle"]) == len(_topics(old, "vehicle/state"))
