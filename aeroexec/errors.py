@@ -68,3 +68,7 @@ class RecordingError(AeroexecError):
 
 class WorldError(AeroexecError):
     """A simulator world file is malformed."""
+
+
+class ViewerError(AeroexecError):
+    """The viewer (Rerun's) cannot be started or cannot serve."""
