@@ -135,8 +135,10 @@ def view(
       aeroexec view base.mcap replay.mcap --save diff.rrd
       aeroexec view flight.bag --web --port 9091
 
-    Exit codes: 0 written (and viewer started when asked); 2 a recording could not be read
-    (not MCAP, not an aeroexec recording, nothing readable) or the file not written.
+    Exit codes: 0 written (and viewer started when asked); 1 the web viewer failed while
+    serving; 2 a recording could not be read (not MCAP, not an aeroexec recording, nothing
+    readable), the file not written or the web viewer's port taken; 128+N stopped by
+    signal N (the web viewer with it).
     """
     if not web and (port is not None or allow_remote):
         raise AeroexecError("--port and --allow-remote are for the web viewer: add --web")
