@@ -16,7 +16,8 @@ key left out, not a null), `enum` only beside a `type`, `properties` on every ob
 
 Foxglove's well-known schemas: `foxglove.Log` follows Foxglove's field layout;
 `foxglove.FrameTransform` and `foxglove.SceneUpdate` are Foxglove's own files, shipped
-unchanged in `aeroexec/data/foxglove/`, so the Log and 3D panels recognize the channels.
+unchanged in `aeroexec/data/foxglove/` and written without their descriptions, so the
+Log and 3D panels recognize the channels.
 
 Each schema's bytes are produced once, with sorted keys and no whitespace, so the same
 code always writes the same schema record.
@@ -267,10 +268,32 @@ def schema_document(name: str) -> dict[str, Any]:
 
 @cache
 def _foxglove_document(name: str) -> dict[str, Any]:
+    """Foxglove's schema file without its prose: every schema in every recording carries
+    it (twice: in a chunk and in the summary), and SceneUpdate's descriptions are half of
+    its 21 kB. The definitions (types, fields, required, titles) are Foxglove's."""
     document: dict[str, Any] = json.loads(
         (FOXGLOVE_SCHEMA_DIR / FOXGLOVE_FILES[name]).read_text(encoding="utf-8")
     )
-    return document
+    return _without_prose(document)
+
+
+_PROSE = frozenset({"description", "$comment"})
+
+
+def _without_prose(schema: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in schema.items():
+        if key in _PROSE:
+            continue
+        if key == "properties":  # field names -> schemas (a field may be named "description")
+            out[key] = {field: _without_prose(sub) for field, sub in value.items()}
+        elif key == "items" and isinstance(value, dict):
+            out[key] = _without_prose(value)
+        elif key == "oneOf":
+            out[key] = [_without_prose(sub) for sub in value]
+        else:
+            out[key] = value
+    return out
 
 
 @cache
