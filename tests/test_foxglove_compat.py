@@ -19,6 +19,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
+import jsonschema
 import pytest
 from mcap.reader import make_reader
 from test_bags_support import AEROSTACK_BAG, short_mission
@@ -149,6 +150,17 @@ def test_import_of_a_mission_bag_with_reconstructed_calls(folder: Path) -> None:
     assert {"aeroexec.ServiceCall", "aeroexec.MissionCommand", "aeroexec.BehaviorEvent"} <= set(
         verdicts
     )
+    # and the strict side: every derived message validates against its schema
+    declared: set[str] = set()
+    with open(out, "rb") as stream:
+        for schema, channel, message in make_reader(stream).iter_messages():
+            if channel.message_encoding == "json":
+                assert schema is not None
+                document = json.loads(schema.data)
+                data = json.loads(message.data)
+                jsonschema.validate(data, document)
+                declared |= set(data) & set(document["properties"])
+    assert {"reconstructed", "evidence"} <= declared  # the importer's own fields are declared
 
 
 @pytest.fixture

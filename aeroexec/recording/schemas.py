@@ -115,6 +115,8 @@ SCHEMAS: dict[str, dict[str, Any]] = {
                 "properties": {"ok": {"type": "boolean"}, "error": {"type": "string"}},
                 "required": ["ok", "error"],
             },
+            # Imported from a bag: a call the importer inferred (bags hold no calls).
+            "reconstructed": {"type": "boolean"},
         },
         ["seq", "caller", "service", "request", "response"],
     ),
@@ -126,6 +128,9 @@ SCHEMAS: dict[str, dict[str, Any]] = {
             "uid": {"type": "integer"},
             "code": {"type": "string", "enum": _EVENT_CODES},
             "detail": {"type": "string"},
+            # Imported from a bag: the event was inferred, or the uid the bag gave it.
+            "reconstructed": {"type": "boolean"},
+            "bag_uid": {"type": "number"},
         },
         ["name", "uid", "code"],
     ),
@@ -177,6 +182,9 @@ SCHEMAS: dict[str, dict[str, Any]] = {
             "arguments": _FREE_OBJECT,
             "query": {"type": "string"},
             "belief": {"type": "string"},
+            # Imported from a bag: the command was inferred from the active list, and how.
+            "reconstructed": {"type": "boolean"},
+            "evidence": {"type": "string"},
         },
         ["command"],
     ),
