@@ -76,3 +76,7 @@ class ConfigError(AeroexecError):
 
 class BehaviorError(AeroexecError):
     """A developer's behaviors cannot be loaded, or a catalog behavior has no code."""
+
+
+class ViewerError(AeroexecError):
+    """The viewer (Rerun's) cannot be started or cannot serve."""

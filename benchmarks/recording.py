@@ -30,6 +30,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from mcap.reader import make_reader
 from mcap.writer import Writer
 
 from aeroexec.catalog.loader import load_catalog
@@ -38,11 +39,9 @@ from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.behavior import GenericBehavior
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.executive import Executive
-from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
 from aeroexec.recording import Recorder
-from aeroexec.recording.schemas import schema_for, schema_name_for_topic
-from aeroexec.recording.writer import log_message, pose_message
+from aeroexec.recording.schemas import schema_for
 from aeroexec.vehicles.null import NullVehicle
 
 MISSION_TARGET = 1.3
@@ -69,16 +68,16 @@ def mission_overhead(workdir: Path, repeat: int) -> tuple[float, float, float, i
     out = workdir / "mission.mcap"
     plain = SessionConfig(mission=APPENDIX_C)
     recorded = SessionConfig(mission=APPENDIX_C, record=out)
-    capture = Capture()
-    _quiet_simulate(plain, [capture])  # also the warm-up: imports, caches
+    _quiet_simulate(plain)  # also the warm-up: imports, caches
     _quiet_simulate(recorded)
+    items = recorded_items(out)
     alone = workdir / "mission-alone.mcap"
     unrec = rec = mcap = float("inf")
     for _ in range(repeat):
         unrec = min(unrec, _best(lambda: _quiet_simulate(plain), 1))
         rec = min(rec, _best(lambda: _quiet_simulate(recorded), 1))
-        mcap = min(mcap, _best(lambda: mcap_alone(alone, capture.items), 1))
-    return unrec, rec, mcap, len(capture.items)
+        mcap = min(mcap, _best(lambda: mcap_alone(alone, items), 1))
+    return unrec, rec, mcap, len(items)
 
 
 # -- (b) activations ---------------------------------------------------------------------------
@@ -93,30 +92,22 @@ def drive(catalog: Catalog, activations: int, observers: list[BusObserver]) -> N
         executive.step()
 
 
-class Capture:
-    """Keeps what the recorder would write: (topic, log time, payload) in order."""
-
-    def __init__(self) -> None:
-        self.items: list[tuple[str, str, int, dict[str, Any]]] = []
-
-    def on_service_call(self, record: ServiceCallRecord) -> None:
-        self.items.append(
-            ("aeroexec.ServiceCall", record.service, record.log_time_ns, record.as_dict())
-        )
-
-    def on_topic(self, record: TopicRecord) -> None:
-        t = record.log_time_ns
-        if record.topic == "log":
-            self.items.append(("foxglove.Log", "log", t, log_message(record.data, t)))
-            return
-        self.items.append((schema_name_for_topic(record.topic), record.topic, t, record.data))
-        if record.topic == "vehicle/state":
-            pose = pose_message(record.data, t)
-            if pose is not None:
-                self.items.append(("foxglove.PoseInFrame", "vehicle/pose", t, pose))
+Item = tuple[str, str, int, Any]
 
 
-def mcap_alone(path: Path, items: list[tuple[str, str, int, dict[str, Any]]]) -> None:
+def recorded_items(path: Path) -> list[Item]:
+    """What the recorder wrote, read back: (schema, topic, log time, payload) in order, so
+    the mcap-alone figure writes exactly the recorder's messages (derived ones included)."""
+    items: list[Item] = []
+    with open(path, "rb") as stream:
+        for schema, channel, message in make_reader(stream).iter_messages(log_time_order=False):
+            topic = channel.topic.removeprefix("/drone1/")
+            name = schema.name if schema is not None else ""
+            items.append((name, topic, message.log_time, json.loads(message.data)))
+    return items
+
+
+def mcap_alone(path: Path, items: list[Item]) -> None:
     """The same messages with the mcap library only (its default chunking and zstd)."""
     with open(path, "wb") as stream:
         writer = Writer(stream)
@@ -142,15 +133,15 @@ def activation_costs(
     workdir: Path, activations: int, repeat: int
 ) -> tuple[float, float, float, int]:
     catalog = load_catalog(DEFAULT_CATALOG)
-    capture = Capture()
-    drive(catalog, activations, [capture])
-    items = capture.items
     out = workdir / "activations.mcap"
     alone = workdir / "alone.mcap"
 
     def recorded() -> None:
         with Recorder(out) as recorder:
             drive(catalog, activations, [recorder])
+
+    recorded()
+    items = recorded_items(out)
 
     off = rec = mcap = float("inf")
     for _ in range(repeat):

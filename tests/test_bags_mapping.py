@@ -109,4 +109,6 @@ def test_cli_mapping_and_drone_options(tmp_path: Path, flag: str) -> None:
     assert "pose                 <- /turtle2/pose" in result.stdout
     states = len(state_times(topic_times(TURTLE_LZ4, "/turtle2/pose"), NS // 2))
     assert states == 43  # 1344 poses over ~21 s: one state per 0.5 s, and the last pose
-    assert f"derived /t2/: vehicle/state {states}, vehicle/pose {states}" in result.stdout
+    assert f"derived /t2/: vehicle/state {states}, vehicle/transform {states}, scene 1" in (
+        result.stdout
+    )

@@ -182,8 +182,9 @@ def test_derived_json_messages_follow_the_profile_schemas(imported: dict[str, Pa
                 assert schema is not None and schema.encoding == "jsonschema"
                 jsonschema.validate(json.loads(message.data), json.loads(schema.data))
                 checked += 1
-    # vehicle/state + vehicle/pose of both bags, and the real bag's 35 process changes
-    assert checked == 2 * (123 + 659) + 35
+    # vehicle/state + vehicle/transform of both bags, one scene each, and the real bag's
+    # 35 process changes
+    assert checked == 2 * (123 + 659) + 2 + 35
 
 
 def test_a_posestamped_bag_gets_vehicle_state_from_its_first_posestamped_topic(
@@ -239,7 +240,7 @@ def test_every_pose_gives_a_state_with_a_zero_period(tmp_path: Path) -> None:
         "state_period_s: 0\ntopics:\n  - {type: geometry_msgs/PoseStamped, kind: pose}\n"
     )
     report = import_bag(ROTORS_BAG, tmp_path / "r.mcap", mapping=mapping)
-    assert report.derived == {"vehicle/state": 6577, "vehicle/pose": 6577}
+    assert report.derived == {"vehicle/state": 6577, "vehicle/transform": 6577, "scene": 1}
     states = [r for r in open_recording(tmp_path / "r.mcap").records() if r.name == "vehicle/state"]
     assert [s.log_time_ns for s in states] == topic_times(ROTORS_BAG, "/ground_truth/pose")
 
@@ -297,4 +298,4 @@ def test_import_cli_reports_and_writes(tmp_path: Path) -> None:
     assert code == 0
     info = json.loads(out)
     assert info["profile"] == "aeroexec"
-    assert info["messages"] == 10046 + 123 * 2 + 35
+    assert info["messages"] == 10046 + 123 * 2 + 1 + 35

@@ -54,7 +54,10 @@ def test_typed_records_match_what_mcap_reads(session_file: Path) -> None:
     event = next(t for t in topics if t.name == "behavior_event")
     assert event.topic == "/drone1/behavior_event"
     assert event.data["name"] == "TAKE_OFF" and event.data["code"] == "GOAL_ACHIEVED"
-    assert {t.name for t in topics} >= {"vehicle/state", "vehicle/pose", "mission/command"}
+    assert {t.name for t in topics} >= {"vehicle/state", "vehicle/transform", "mission/command"}
+    # A call made at the top has no parent_seq in the file; the reader gives None.
+    assert first.parent_seq is None
+    assert any(c.parent_seq == first.seq for c in calls)
     assert recording.notes == []
 
 
@@ -185,8 +188,8 @@ def _write_log_file(path: Path, messages: int) -> None:
         for i in range(messages):
             recorder.on_service_call(
                 ServiceCallRecord(
-                    i,
-                    None,
+                    i + 1,
+                    0,  # nested: one message per call (no call_log line)
                     "mission",
                     "check_consistency",
                     {"behavior": "GO_TO_POINT", "active_behaviors": ["X" * 40]},

@@ -23,8 +23,9 @@ from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
 from aeroexec.recording import FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
 from aeroexec.recording.scan import RecordScanner
-from aeroexec.recording.schemas import SCHEMAS
+from aeroexec.recording.schemas import SCHEMAS, schema_document
 from aeroexec.recording.writer import LIBRARY
+from aeroexec.vehicles.world import DEFAULT_WORLD, parse_world
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -59,10 +60,17 @@ def _readable_messages(path: Path) -> int:
     return sum(type(r).__name__ == "Message" for _, r in scanner.records())
 
 
-def _call(seq: int, service: str = "activate_behavior", t: int = 0) -> ServiceCallRecord:
+def _call(
+    seq: int, service: str = "activate_behavior", t: int = 0, parent: int | None = None
+) -> ServiceCallRecord:
     return ServiceCallRecord(
-        seq, None, "mission", service, {"behavior": "TAKE_OFF"}, {"ok": True, "error": ""}, t
+        seq, parent, "mission", service, {"behavior": "TAKE_OFF"}, {"ok": True, "error": ""}, t
     )
+
+
+def _nested(seq: int) -> ServiceCallRecord:
+    """A call made inside call 0: one message (a top-level call also writes a call_log line)."""
+    return _call(seq, "check_consistency", parent=0)
 
 
 # -- the profile, as the mcap library reads it ----------------------------------------------
@@ -99,7 +107,8 @@ def test_every_channel_has_a_json_schema_and_every_message_validates(session_fil
         "aeroexec.BeliefChange",
         "aeroexec.MissionCommand",
         "aeroexec.VehicleState",
-        "foxglove.PoseInFrame",
+        "foxglove.FrameTransform",
+        "foxglove.SceneUpdate",
         "foxglove.Log",
     } <= names
 
@@ -115,8 +124,10 @@ def test_channels_are_namespaced_one_per_service(session_file: Path) -> None:
         "beliefs",
         "mission/command",
         "vehicle/state",
-        "vehicle/pose",
+        "vehicle/transform",
+        "scene",
         "log",
+        "call_log",
         "activate_behavior",
         "inhibit_behavior",
         "check_behavior_format",
@@ -126,7 +137,10 @@ def test_channels_are_namespaced_one_per_service(session_file: Path) -> None:
     for schema, channel, _, decoded in messages:
         if schema.name == "aeroexec.ServiceCall":
             assert channel.topic == "/drone1/" + decoded["service"]
-            assert set(decoded) == {"seq", "parent_seq", "caller", "service", "request", "response"}
+            # A call made at the top has no parent_seq: the key is left out, never null.
+            keys = {"seq", "caller", "service", "request", "response"}
+            assert set(decoded) in (keys, keys | {"parent_seq"})
+            assert isinstance(decoded.get("parent_seq", 0), int)
 
 
 def test_channel_ids_follow_first_use(session_file: Path) -> None:
@@ -141,8 +155,8 @@ def test_call_tree_can_be_rebuilt(session_file: Path) -> None:
     calls = [d for s, _, _, d in _decoded(session_file) if s.name == "aeroexec.ServiceCall"]
     position = {c["seq"]: i for i, c in enumerate(calls)}
     assert len(position) == len(calls)  # seq is unique
-    nested = [c for c in calls if c["parent_seq"] is not None]
-    assert nested
+    nested = [c for c in calls if "parent_seq" in c]
+    assert nested and len(nested) < len(calls)
     for call in nested:
         # a nested call completes, and is recorded, before the call it happened inside
         assert position[call["seq"]] < position[call["parent_seq"]]
@@ -184,7 +198,14 @@ def test_behavior_events_and_capabilities_are_recorded(session_file: Path) -> No
 
 
 # -- derived Foxglove messages ----------------------------------------------------------------
-def test_pose_quaternion_from_yaw_and_log_levels(tmp_path: Path) -> None:
+def _by_topic(path: Path) -> dict[str, list[Any]]:
+    decoded: dict[str, list[Any]] = {}
+    for _, channel, _, data in _decoded(path):
+        decoded.setdefault(channel.topic, []).append(data)
+    return decoded
+
+
+def test_frame_transform_from_position_and_yaw_and_log_levels(tmp_path: Path) -> None:
     path = tmp_path / "derived.mcap"
     with Recorder(path) as recorder:
         state = {
@@ -199,15 +220,16 @@ def test_pose_quaternion_from_yaw_and_log_levels(tmp_path: Path) -> None:
         recorder.on_topic(TopicRecord("vehicle/state", state, 1_500_000_000))
         recorder.on_topic(TopicRecord("log", {"level": "WARNING", "message": "m", "name": "x"}, 7))
         recorder.on_topic(TopicRecord("log", {"level": "ERROR", "message": "e", "name": "x"}, 8))
-    decoded = {c.topic: [] for _, c, _, _ in _decoded(path)}
-    for _, channel, _, data in _decoded(path):
-        decoded[channel.topic].append(data)
-    pose = decoded["/drone1/vehicle/pose"][0]
-    assert pose["timestamp"] == {"sec": 1, "nsec": 500_000_000}
-    assert pose["pose"]["position"] == {"x": 1.0, "y": 2.0, "z": 3.0}
-    q = pose["pose"]["orientation"]
+    decoded = _by_topic(path)
+    (transform,) = decoded["/drone1/vehicle/transform"]
+    assert transform["timestamp"] == {"sec": 1, "nsec": 500_000_000}
+    assert transform["parent_frame_id"] == "world"
+    assert transform["child_frame_id"] == "drone1/base_link"
+    assert transform["translation"] == {"x": 1.0, "y": 2.0, "z": 3.0}
+    q = transform["rotation"]
     assert q["z"] == pytest.approx(math.sqrt(0.5)) and q["w"] == pytest.approx(math.sqrt(0.5))
     assert q["x"] == 0.0 and q["y"] == 0.0
+    jsonschema.validate(transform, schema_document("foxglove.FrameTransform"))
     logs = decoded["/drone1/log"]
     assert [entry["level"] for entry in logs] == [3, 4]
     assert logs[0] == {
@@ -219,6 +241,86 @@ def test_pose_quaternion_from_yaw_and_log_levels(tmp_path: Path) -> None:
         "line": 0,
     }
     jsonschema.validate(logs[0], SCHEMAS["foxglove.Log"])
+
+
+def test_scene_holds_the_vehicle_markers_and_the_moving_object(session_file: Path) -> None:
+    scenes = [
+        (m.log_time, d) for _, c, m, d in _decoded(session_file) if c.topic == "/drone1/scene"
+    ]
+    (t0, first), *updates = scenes
+    assert t0 == 100_000_000  # with the first vehicle state
+    entities = {e["id"]: e for e in first["entities"]}
+    world = parse_world(DEFAULT_WORLD.read_text(), "default.yaml")
+    assert set(entities) == {"vehicle", "object"} | {f"marker/{m.id}" for m in world.markers}
+    vehicle = entities["vehicle"]
+    assert vehicle["frame_id"] == "drone1/base_link" and vehicle["frame_locked"] is True
+    assert vehicle["cubes"] and vehicle["arrows"]  # the body, and its heading
+    for marker in world.markers:
+        entity = entities[f"marker/{marker.id}"]
+        assert entity["frame_id"] == "world"
+        (cube,) = entity["cubes"]
+        p = cube["pose"]["position"]
+        assert (p["x"], p["y"], p["z"]) == marker.position
+        assert entity["texts"][0]["text"] == f"marker {marker.id}"
+    # The walker drifts at 0.05 m/s: its entity again each 0.2 m (4 s), where it is then.
+    assert world.object is not None
+    assert [t for t, _ in updates] == [4_100_000_000, 8_100_000_000, 12_100_000_000, 16_100_000_000]
+    for t, update in [(t0, first), *updates]:
+        (obj,) = [e for e in update["entities"] if e["id"] == "object"]
+        x = obj["spheres"][0]["pose"]["position"]["x"]
+        assert x == pytest.approx(world.object.at(t / 1e9)[0])
+    assert all([e["id"] for e in update["entities"]] == ["object"] for _, update in updates)
+    for _, update in scenes:
+        jsonschema.validate(update, schema_document("foxglove.SceneUpdate"))
+
+
+def test_call_log_has_one_line_per_top_level_call(session_file: Path) -> None:
+    messages = _decoded(session_file)
+    roots = [
+        (m.log_time, d)
+        for s, _, m, d in messages
+        if s.name == "aeroexec.ServiceCall" and "parent_seq" not in d
+    ]
+    lines = [(m.log_time, d) for _, c, m, d in messages if c.topic == "/drone1/call_log"]
+    assert len(lines) == len(roots) == 15
+    for (t_call, call), (t_line, line) in zip(roots, lines, strict=True):
+        assert t_line == t_call
+        assert line["name"] == call["caller"]
+        assert line["message"].startswith(call["service"])
+    by_text = [line["message"] for _, line in lines]
+    assert "activate_behavior GO_TO_POINT coordinates=[3, 5.5, 1.3] -> ok uid=4" in by_text
+    assert "inhibit_behavior PAY_ATTENTION_TO_VISUAL_MARKERS -> ok" in by_text
+
+
+def test_a_refused_call_is_a_warning_in_the_call_log(tmp_path: Path) -> None:
+    path = tmp_path / "refused.mcap"
+    refused = ServiceCallRecord(
+        3,
+        None,
+        "mission",
+        "activate_behavior",
+        {"behavior": "FLIP"},
+        {"ok": False, "error": "no"},
+        5,
+    )
+    with Recorder(path) as recorder:
+        recorder.on_service_call(refused)
+        recorder.on_service_call(_nested(4))
+    decoded = _by_topic(path)
+    (line,) = decoded["/drone1/call_log"]
+    assert line["level"] == 3 and line["message"] == "activate_behavior FLIP -> refused: no"
+    assert "parent_seq" not in decoded["/drone1/activate_behavior"][0]
+    assert decoded["/drone1/check_consistency"][0]["parent_seq"] == 0
+
+
+def test_absent_mission_command_fields_are_left_out(tmp_path: Path) -> None:
+    path = tmp_path / "command.mcap"
+    with Recorder(path) as recorder:
+        command = {"command": "inhibit_behavior", "behavior": "LAND", "arguments": None}
+        recorder.on_topic(TopicRecord("mission/command", command, 0))
+    (data,) = _by_topic(path)["/drone1/mission/command"]
+    assert data == {"command": "inhibit_behavior", "behavior": "LAND"}
+    jsonschema.validate(data, SCHEMAS["aeroexec.MissionCommand"])
 
 
 def test_non_finite_floats_become_null_so_json_stays_valid(tmp_path: Path) -> None:
@@ -258,12 +360,12 @@ def test_flush_after_100_messages(tmp_path: Path) -> None:
     path = tmp_path / "count.mcap"
     recorder = Recorder(path, flush_interval_ns=10**18)
     for i in range(99):
-        recorder.on_service_call(_call(i))
+        recorder.on_service_call(_nested(i))
     assert _readable_messages(path) == 0 and recorder.messages_flushed == 0
-    recorder.on_service_call(_call(99))
+    recorder.on_service_call(_nested(99))
     assert _readable_messages(path) == 100 and recorder.messages_flushed == 100
     for i in range(100, 250):
-        recorder.on_service_call(_call(i))
+        recorder.on_service_call(_nested(i))
     assert _readable_messages(path) == 200
     recorder.close()
     assert _readable_messages(path) == 250
@@ -273,13 +375,14 @@ def test_flush_after_half_a_second_of_clock_time(tmp_path: Path) -> None:
     path = tmp_path / "time.mcap"
     recorder = Recorder(path)
     state = {"position": [0, 0, 0], "velocity": [0, 0, 0], "yaw": 0.0, "battery": 1.0}
-    for tick in range(5):  # 0.0 .. 0.4 s: span 0.4 s, 10 messages (state + pose)
+    # 0.0 .. 0.4 s: span 0.4 s, 11 messages (state + transform, and the scene at 0.0)
+    for tick in range(5):
         recorder.on_topic(TopicRecord("vehicle/state", {**state, "flying": False}, tick * 10**8))
     assert _readable_messages(path) == 0
     recorder.on_topic(TopicRecord("vehicle/state", {**state, "flying": True}, 5 * 10**8))
-    assert _readable_messages(path) == 11  # the state at 0.5 s is flushed; its pose follows
+    assert _readable_messages(path) == 12  # the state at 0.5 s is flushed; its transform follows
     recorder.close()
-    assert _readable_messages(path) == 12
+    assert _readable_messages(path) == 13
 
 
 def test_header_metadata_and_attachments_are_on_disk_before_any_message(tmp_path: Path) -> None:
@@ -324,7 +427,7 @@ def test_service_call_with_nan_is_still_valid_json(tmp_path: Path) -> None:
     )
     with Recorder(path) as recorder:
         recorder.on_service_call(record)
-    ((_, _, _, data),) = _decoded(path)
+    (data,) = _by_topic(path)["/drone1/activate_behavior"]
     assert data["request"] == {"x": None}
 
 

@@ -4,6 +4,7 @@ read by aeroexec's reader and by the `mcap` library's."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections import Counter
 from dataclasses import dataclass, field
@@ -218,19 +219,28 @@ def test_trajectory_has_one_point_per_vehicle_state(
     assert segments[5][1] == pytest.approx(points[5], abs=1e-6)
 
 
-def test_pose_is_a_transform_per_pose_message(
+def test_pose_is_a_transform_per_vehicle_state(
     recordings: dict[str, Path], views: dict[str, Rrd]
 ) -> None:
-    poses = _topics(recordings["appendix_c"], "vehicle/pose")
+    # The pose comes from vehicle/state; it agrees with the frame transform the
+    # recording carries for Foxglove (the same pose, derived by the recorder).
+    transforms = _topics(recordings["appendix_c"], "vehicle/transform")
     rrd = views["appendix_c"]
     rows = rrd.rows["/vehicle"]
-    assert len(rows) == len(poses)
-    assert rrd.times("/vehicle") == [p.log_time_ns for p in poses]
-    last = poses[-1].data["pose"]
-    q = last["orientation"]
-    assert _single(rows[-1]["Transform3D:quaternion"]) == pytest.approx(
-        [q["x"], q["y"], q["z"], q["w"]], abs=1e-6
+    assert (
+        len(rows)
+        == len(transforms)
+        == _mcap_count(recordings["appendix_c"], "/drone1/vehicle/state")
     )
+    assert rrd.times("/vehicle") == [p.log_time_ns for p in transforms]
+    for row, message in zip(rows, transforms, strict=True):
+        q, p = message.data["rotation"], message.data["translation"]
+        assert _single(row["Transform3D:quaternion"]) == pytest.approx(
+            [q["x"], q["y"], q["z"], q["w"]], abs=1e-6
+        )
+        assert _single(row["Transform3D:translation"]) == pytest.approx(
+            [p["x"], p["y"], p["z"]], abs=1e-5
+        )
     # appendix_c turns to -90 degrees: some pose has a non-identity rotation
     assert any(abs(_single(r["Transform3D:quaternion"])[2]) > 0.5 for r in rows)
 
@@ -266,6 +276,17 @@ def _expected_transitions(path: Path) -> dict[str, list[tuple[int, float]]]:
         edges.append((t, 1.0))
         if uid in ended:
             edges.append((max(t, ended[uid]), 0.0))
+    return {behavior: _one_per_instant(edges) for behavior, edges in out.items()}
+
+
+def _one_per_instant(pairs: list[tuple[int, float]]) -> list[tuple[int, float]]:
+    """The view's rule: a change at or before the series' previous row goes 1 ns after it
+    (a plot never holds two values at one time)."""
+    out: list[tuple[int, float]] = []
+    for t, value in pairs:
+        if out and t <= out[-1][0]:
+            t = out[-1][0] + 1
+        out.append((t, value))
     return out
 
 
@@ -280,20 +301,56 @@ def test_behavior_intervals_match_activations_and_events(
         assert _transitions(rrd, f"/behaviors/active/{behavior}") == edges, behavior
 
 
+def test_plots_show_no_value_that_did_not_happen(
+    recordings: dict[str, Path], views: dict[str, Rrd]
+) -> None:
+    """Rerun's plot averages rows that share a time (the 0.5 levels once seen): every
+    series has one row per sim_time, only values the session had, and keeps extremes,
+    not averages, when zoomed out (aggregation MinMax)."""
+    rrd = views["appendix_c"]
+    happened: dict[str, set[float]] = {}
+    for message in _topics(recordings["appendix_c"], "list_of_active_capabilities"):
+        for c in message.data["capabilities"]:
+            happened.setdefault(c["name"], {0.0}).add(float(c["references"]))
+    series = sorted(e for e, rows in rrd.rows.items() if "Scalars:scalars" in rows[0])
+    behaviors = [e for e in series if e.startswith("/behaviors/active/")]
+    capabilities = [e for e in series if e.startswith("/capabilities/")]
+    assert len(behaviors) == 5 and len(capabilities) == len(happened) >= 3
+    for entity in series:
+        times = rrd.times(entity)
+        assert times == sorted(set(times)), entity  # strictly increasing: one row per time
+        values = set(rrd.values(entity, "Scalars:scalars"))
+        if entity in behaviors:
+            assert values == {0.0, 1.0}, entity
+        elif entity in capabilities:
+            assert values <= happened[entity.rsplit("/", 1)[1]], entity
+        style = rrd.static[entity][0]
+        assert _single(style["SeriesLines:aggregation_policy"]) == 5, entity  # MinMax
+    # GO_TO_POINT #3 ends and #4 starts at 4.0 s: the drop and the rise are both there.
+    rows = list(
+        zip(
+            rrd.times("/behaviors/active/GO_TO_POINT"),
+            rrd.values("/behaviors/active/GO_TO_POINT", "Scalars:scalars"),
+            strict=True,
+        )
+    )
+    assert (4_000_000_000, 0.0) in rows and (4_000_000_001, 1.0) in rows
+
+
 def test_preempted_and_failed_at_start_behaviors(views: dict[str, Rrd]) -> None:
     rrd = views["faults"]
     # GO_TO_POINT #3 is preempted at 2.3 s the instant it starts; the next GO_TO_POINT
     # starts at 2.8 s: up, down, up at the right times, not merged into one interval
     assert _transitions(rrd, "/behaviors/active/GO_TO_POINT")[:3] == [
         (2_300_000_000, 1.0),
-        (2_300_000_000, 0.0),
+        (2_300_000_001, 0.0),  # the same instant: the drop shows 1 ns after the rise
         (2_800_000_000, 1.0),
     ]
     # LAND fails inside the call that starts it: its end event is written before the
     # activate_behavior call, and the track still ends at 0
     assert _transitions(rrd, "/behaviors/active/LAND") == [
         (13_000_000_000, 1.0),
-        (13_000_000_000, 0.0),
+        (13_000_000_001, 0.0),
     ]
     assert rrd.values("/behaviors/active/LAND", "Scalars:scalars")[-1] == 0.0
 
@@ -340,14 +397,16 @@ def test_capability_counts_follow_the_published_lists(
     assert len(names) >= 3
     for name in names:
         entity = f"/capabilities/{name}"
-        expected = _changes(
-            [
-                (
-                    m.log_time_ns,
-                    {c["name"]: c["references"] for c in m.data["capabilities"]}.get(name, 0),
-                )
-                for m in messages
-            ]
+        expected = _one_per_instant(
+            _changes(
+                [
+                    (
+                        m.log_time_ns,
+                        {c["name"]: c["references"] for c in m.data["capabilities"]}.get(name, 0),
+                    )
+                    for m in messages
+                ]
+            )
         )
         got = _changes(
             list(zip(rrd.times(entity), rrd.values(entity, "Scalars:scalars"), strict=True))
@@ -524,3 +583,28 @@ def test_incomplete_recording_is_shown_up_to_the_damage(
     assert not source.complete and source.problem
     rrd = read_rrd(tmp_path / "cut.rrd")
     assert len(rrd.rows["/trajectory"]) == len(states)
+
+
+def test_the_first_release_recording_still_converts(tmp_path: Path) -> None:
+    """recordings/appendix_c-v0.1.0.mcap: top-level calls with `"parent_seq": null` and
+    the old `vehicle/pose` channel: the same call tree and pose track as new files."""
+    old = Path(__file__).resolve().parent.parent / "recordings" / "appendix_c-v0.1.0.mcap"
+    with open(old, "rb") as stream:
+        raw_roots = sum(
+            1
+            for schema, _, message in make_reader(stream).iter_messages()
+            if schema is not None
+            and schema.name == "aeroexec.ServiceCall"
+            and json.loads(message.data)["parent_seq"] is None
+        )
+    calls = _calls(old)
+    assert raw_roots > 0
+    assert sum(c.parent_seq is None for c in calls) == raw_roots
+    write_view([old], tmp_path / "old.rrd")
+    rrd = read_rrd(tmp_path / "old.rrd")
+    depths = _depths(calls)
+    assert max(depths.values()) >= 3
+    for row in rrd.rows["/calls"]:
+        text = _single(row["TextLog:text"])
+        assert len(text) - len(text.lstrip(" ")) == 2 * depths[row["seq"]]
+    assert len(rrd.rows["/vehicle"]) == len(_topics(old, "vehicle/state"))

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rerun.chunk import RrdReader
@@ -46,11 +47,25 @@ def launches(monkeypatch: pytest.MonkeyPatch) -> list[tuple[Path, bool]]:
     """Record viewer launches instead of starting one, as if it could run."""
     calls: list[tuple[Path, bool]] = []
 
-    def fake_open(rrd: Path, *, web: bool = False) -> int:
-        calls.append((rrd, web))
-        return 0
+    def fake_open(rrd: Path) -> None:
+        calls.append((rrd, False))
 
     monkeypatch.setattr("aeroexec.viz.viewer.open_viewer", fake_open)
+    monkeypatch.setattr("aeroexec.viz.viewer.cannot_spawn", lambda web=False: None)
+    return calls
+
+
+@pytest.fixture()
+def served(monkeypatch: pytest.MonkeyPatch) -> list[tuple[Path, str, int]]:
+    """Record web viewer launches (file, bind address, port) instead of serving."""
+    calls: list[tuple[Path, str, int]] = []
+
+    def fake_serve(rrd: Path, *, bind: str, port: int, on_ready: Any) -> int:
+        calls.append((rrd, bind, port))
+        on_ready(f"http://{bind}:{port}", 1)
+        return 0
+
+    monkeypatch.setattr("aeroexec.viz.viewer.serve_web", fake_serve)
     monkeypatch.setattr("aeroexec.viz.viewer.cannot_spawn", lambda web=False: None)
     return calls
 
@@ -114,11 +129,51 @@ def test_no_spawn_writes_the_file_only(flight: Path, launches: list[tuple[Path, 
     assert launches == []
 
 
-def test_web_serves_the_web_viewer(flight: Path, launches: list[tuple[Path, bool]]) -> None:
+def test_web_serves_on_this_machine_only_by_default(
+    flight: Path, launches: list[tuple[Path, bool]], served: list[tuple[Path, str, int]]
+) -> None:
     code, out, _ = _invoke("view", flight, "--web", "--no-spawn")
     assert code == 0
-    assert launches == [(flight.with_suffix(".rrd"), True)]
-    assert "web viewer" in out
+    assert launches == []
+    assert served == [(flight.with_suffix(".rrd"), "127.0.0.1", 9090)]
+    assert "serving the web viewer at http://127.0.0.1:9090 (Ctrl-C to stop)" in out
+
+
+def test_web_port_and_allow_remote(flight: Path, served: list[tuple[Path, str, int]]) -> None:
+    code, _, err = _invoke("view", flight, "--web", "--port", "9191", "--allow-remote")
+    assert code == 0, err
+    assert served == [(flight.with_suffix(".rrd"), "0.0.0.0", 9191)]
+
+
+@pytest.mark.parametrize("args", [["--port", "9191"], ["--allow-remote"]])
+def test_web_options_without_web_are_refused(flight: Path, args: list[str]) -> None:
+    code, out, err = _invoke("view", flight, *args)
+    assert code == 2 and out == ""
+    assert err == "aeroexec: error: --port and --allow-remote are for the web viewer: add --web\n"
+    assert not flight.with_suffix(".rrd").exists()
+
+
+def test_a_bag_is_imported_and_viewed(tmp_path: Path, headless: None) -> None:
+    bag = tmp_path / "flight.bag"
+    shutil.copyfile(FIXTURES / "bags" / "aerostack_2017_first_view_ros1.bag", bag)
+    code, out, err = _invoke("view", bag, "--no-spawn")
+    assert code == 0, err
+    target = tmp_path / "flight.rrd"
+    assert f"wrote {target}" in out
+    assert f"{bag}: 282 messages, 123 vehicle states" in out
+    assert {"/trajectory", "/vehicle", "/processes/droneCommand"} <= _entities(target)
+    assert "not decoded" not in err  # the bag's own ROS 1 channels are not news
+    assert set(tmp_path.iterdir()) == {bag, target}  # nothing else next to the bag
+
+
+def test_a_bag_without_mapped_topics_is_refused(tmp_path: Path) -> None:
+    bag = tmp_path / "turtle.bag"
+    shutil.copyfile(FIXTURES / "bags" / "ros1_turtlesim_example_lz4.bag", bag)
+    code, out, err = _invoke("view", bag, "--no-spawn")
+    assert code == 2 and out == ""
+    assert err.startswith(f"{bag}: error: nothing to show: the bag has none of the topics")
+    assert err.count("\n") == 1
+    assert not (tmp_path / "turtle.rrd").exists()
 
 
 def test_two_recordings_default_name_and_both_roots(

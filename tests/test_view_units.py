@@ -216,7 +216,15 @@ def test_cannot_spawn_reasons(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -
 def test_viewer_command(tmp_path: Path) -> None:
     exe = tmp_path / "rerun"
     assert viewer_command(tmp_path / "a.rrd", binary=exe) == [str(exe), str(tmp_path / "a.rrd")]
-    assert viewer_command(tmp_path / "a.rrd", web=True, binary=exe)[1] == "--web-viewer"
+    web = viewer_command(tmp_path / "a.rrd", web=True, binary=exe)
+    assert web[1] == "--web-viewer" and web[-1] == str(tmp_path / "a.rrd")
+    # this machine only, the page on rerun's usual port, the data server on a free one
+    assert web[web.index("--bind") + 1] == "127.0.0.1"
+    assert web[web.index("--web-viewer-port") + 1] == "9090"
+    assert web[web.index("--port") + 1] == "0"
+    remote = viewer_command(tmp_path / "a.rrd", web=True, binary=exe, bind="0.0.0.0", port=1)
+    assert remote[remote.index("--bind") + 1] == "0.0.0.0"
+    assert remote[remote.index("--web-viewer-port") + 1] == "1"
 
 
 def test_the_bundled_viewer_is_found() -> None:

@@ -1,5 +1,6 @@
 """The aeroexec channels that follow a bag topic message by message (no reconstruction):
-`vehicle/state`, `list_of_active_capabilities`, `beliefs`, `process_state`.
+`vehicle/state` (+ `vehicle/transform`), `list_of_active_capabilities`, `beliefs`,
+`process_state`.
 
 Each tracker takes the plain values of `extract` and returns the payloads to write (the
 aeroexec profile's, see aeroexec/recording/schemas.py); like the executive, the list and
@@ -8,13 +9,10 @@ process channels are written on change only.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from aeroexec.bags.extract import Pose
-from aeroexec.recording.writer import POSE_FRAME
-
-_NS = 1_000_000_000
+from aeroexec.recording.foxglove import transform
 
 #: Without a flight-status topic, the vehicle counts as flying above this height (m).
 FLYING_ABOVE_M = 0.1
@@ -67,22 +65,11 @@ class VehicleStateBuilder:
         return data
 
 
-def pose_in_frame(pose: Pose, time_ns: int) -> dict[str, Any] | None:
-    """The `vehicle/pose` (foxglove.PoseInFrame) the Recorder derives from a
+def pose_transform(pose: Pose, time_ns: int, child_frame: str) -> dict[str, Any] | None:
+    """The `vehicle/transform` (foxglove.FrameTransform) the Recorder derives from a
     `vehicle/state` with this position and yaw; None when a value is not finite."""
     x, y, z = pose.position
-    yaw = pose.yaw
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(yaw)):
-        return None
-    sec, nsec = divmod(max(time_ns, 0), _NS)
-    return {
-        "timestamp": {"sec": sec, "nsec": nsec},
-        "frame_id": POSE_FRAME,
-        "pose": {
-            "position": {"x": x, "y": y, "z": z},
-            "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
-        },
-    }
+    return transform(x, y, z, pose.yaw, time_ns, child_frame)
 
 
 class CapabilityTracker:

@@ -5,11 +5,12 @@ Every message of every connection is copied byte for byte to a raw `ros1` channe
 when it gives a vehicle state, the latest velocity/battery/status before it), to derive
 the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
 and coordinator calls (`reconstruct.py`), `list_of_active_capabilities`, `beliefs`,
-`process_state`, `vehicle/state` (+ `vehicle/pose`). Log times are the bag's. Messages are
-written in bag time order: reconstruction decides an input only when the 2 x grace
-after it has been read, so the messages from its horizon on wait in a small heap (about
-a second of bag time) until it has; within one instant the reconstructed commands come
-first, as the executive would have published them.
+`process_state`, `vehicle/state` (+ `vehicle/transform`, and the `scene` with the
+vehicle's body at the first state), `call_log` for the reconstructed calls. Log times are
+the bag's. Messages are written in bag time order: reconstruction decides an input only
+when the 2 x grace after it has been read, so the messages from its horizon on wait in a
+small heap (about a second of bag time) until it has; within one instant the
+reconstructed commands come first, as the executive would have published them.
 
 The output is written next to the target and renamed into place at the end, so a bag
 that turns out damaged halfway leaves no half-written file behind.
@@ -33,13 +34,14 @@ from aeroexec.bags.derive import (
     CapabilityTracker,
     ProcessTracker,
     VehicleStateBuilder,
-    pose_in_frame,
+    pose_transform,
 )
 from aeroexec.bags.mapping import Kind, Mapping, Rule, check_drone, load_mapping
 from aeroexec.bags.reconstruct import ACTIVATE, INHIBIT, Reconstructor, Stats
 from aeroexec.bags.sink import COMPRESSIONS, RAW_PREFIX, ImportSink
 from aeroexec.bags.types import Decoder, TypeResolver
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.recording.foxglove import first_scene, vehicle_frame
 from aeroexec.recording.writer import METADATA_NAME
 
 #: The import's metadata: what replay and info read (clock and vehicle kinds).
@@ -268,11 +270,14 @@ class _Import:
             )
 
     def _state(self, pose: extract.Pose, time_ns: int) -> None:
+        first = self._last_state_ns is None
         self._last_state_ns = time_ns
         self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
-        in_frame = pose_in_frame(pose, time_ns)
-        if in_frame is not None:
-            self._derive("vehicle/pose", time_ns, in_frame)
+        frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
+        if frame is not None:
+            self._derive("vehicle/transform", time_ns, frame)
+        if first:  # a bag has no world: the scene is the vehicle's body
+            self._derive("scene", time_ns, first_scene(time_ns, self.drone, None))
 
     def _derive(self, topic: str, time_ns: int, data: dict[str, Any]) -> None:
         if not self.reconstructing:

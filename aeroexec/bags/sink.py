@@ -23,6 +23,7 @@ from typing import IO, Any
 from mcap.writer import CompressionType, Writer
 
 from aeroexec.bags.bagfile import BagConnection
+from aeroexec.recording.foxglove import call_log_message
 from aeroexec.recording.schemas import (
     MESSAGE_ENCODING,
     PROFILE,
@@ -124,15 +125,18 @@ class ImportSink:
         self, topic: str, log_time_ns: int, data: dict[str, Any], call: bool = False
     ) -> None:
         """An aeroexec-profile message on `/<drone>/<topic>` (`call`: a service call
-        record, numbered here in write order)."""
+        record, numbered here in write order, made at the top: it has no `parent_seq`,
+        and its line in `call_log`)."""
         if call:
-            data = {"seq": self._call_seq, "parent_seq": None, **data}
+            data = {"seq": self._call_seq, **data}
             self._call_seq += 1
             channel = self._json_channel(topic, SERVICE_CALL)
         else:
             channel = self._json_channel(topic, schema_name_for_topic(topic))
         self._add(channel, log_time_ns, encode_json(data))
         self.derived[topic] = self.derived.get(topic, 0) + 1
+        if call:
+            self.derived_message("call_log", log_time_ns, call_log_message(data, log_time_ns))
 
     def _add(self, channel: int, log_time_ns: int, data: bytes) -> None:
         self._writer.add_message(channel, log_time_ns, data, log_time_ns, self._sequence)

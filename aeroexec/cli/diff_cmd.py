@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import Annotated
 
 import typer
@@ -15,7 +16,7 @@ from aeroexec.cli.replay_cmd import (
     tolerance_of,
 )
 from aeroexec.replay.engine import diff_recordings
-from aeroexec.replay.report import diff_json, diff_junit, diff_text
+from aeroexec.replay.report import diff_json, diff_junit, diff_text, start_timing
 
 
 @app.command("diff")
@@ -42,11 +43,14 @@ def diff(
 
     Exit codes: 0 no differences; 1 differences; 2 a recording could not be read.
     """
+    # A JUnit report says when the run started (and checks SOURCE_DATE_EPOCH up front).
+    timing = start_timing() if output_format is OutputFormat.junit else None
+    started = time.perf_counter()
     result = diff_recordings(base, new, tolerance_of(tolerance, position_tolerance))
     if output_format is OutputFormat.json:
         typer.echo(diff_json(result))
     elif output_format is OutputFormat.junit:
-        typer.echo(diff_junit(result))
+        typer.echo(diff_junit(result, timing=timing, seconds=time.perf_counter() - started))
     else:
         typer.echo(diff_text(result))
     if not result.equal:

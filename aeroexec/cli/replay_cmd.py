@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import time
 from enum import Enum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -17,7 +18,7 @@ from aeroexec.plugins import discover
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for, replay_many
 from aeroexec.replay.inputs import expand_inputs
-from aeroexec.replay.report import replay_json, replay_junit, replay_text
+from aeroexec.replay.report import replay_json, replay_junit, replay_text, start_timing
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -149,6 +150,9 @@ def replay(
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs; 2 an input could not be read (one line on stderr each).
     """
+    # A JUnit report says when the run started (and checks SOURCE_DATE_EPOCH up front).
+    timing = start_timing() if output_format is OutputFormat.junit else None
+    started = time.perf_counter()
     if catalog is not None:
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
     sources = behavior_sources(behaviors, project())
@@ -186,7 +190,7 @@ def replay(
     if output_format is OutputFormat.json:
         typer.echo(replay_json(results))
     elif output_format is OutputFormat.junit:
-        typer.echo(replay_junit(results))
+        typer.echo(replay_junit(results, timing=timing, seconds=time.perf_counter() - started))
     else:
         text = replay_text(results)
         if text:

@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.errors import AeroexecError
+from aeroexec.viz.viewer import DEFAULT_WEB_PORT
 
 # rerun takes ~0.5 s to import: only `view` itself may pay for it, not every command.
 if TYPE_CHECKING:
@@ -53,7 +55,11 @@ def _summary(report: ViewReport) -> None:
 def view(
     recording: Annotated[
         Path,
-        typer.Argument(metavar="REC", help="An aeroexec recording (MCAP).", show_default=False),
+        typer.Argument(
+            metavar="REC",
+            help="An aeroexec recording (MCAP) or a ROS 1 bag (imported on the way).",
+            show_default=False,
+        ),
     ],
     other: Annotated[
         Path | None,
@@ -82,7 +88,30 @@ def view(
     ] = None,
     web: Annotated[
         bool,
-        typer.Option("--web", help="Serve the web viewer instead (no display needed; Ctrl-C)."),
+        typer.Option(
+            "--web",
+            help="Serve the web viewer instead (no display needed) until Ctrl-C; it stops "
+            "when aeroexec does.",
+        ),
+    ] = False,
+    port: Annotated[
+        int | None,
+        typer.Option(
+            "--port",
+            metavar="PORT",
+            min=0,
+            max=65535,
+            help=f"The web viewer's port (default {DEFAULT_WEB_PORT}; 0: any free port).",
+            show_default=False,
+        ),
+    ] = None,
+    allow_remote: Annotated[
+        bool,
+        typer.Option(
+            "--allow-remote",
+            help="Serve the web viewer on every network interface, not only this machine "
+            "(127.0.0.1).",
+        ),
     ] = False,
 ) -> None:
     """Show a session in Rerun: the flight in 3D (world markers, vehicle pose, trajectory),
@@ -91,22 +120,28 @@ def view(
     timeline (service calls also on `seq`).
 
     With REC2, both sessions sit side by side (under /base and /new), aligned on sim_time:
-    a base run and its replay under a new catalog, say.
+    a base run and its replay under a new catalog, say. A ROS 1 bag is imported first
+    (the shipped Aerostack mapping; `aeroexec import --mapping` for others).
 
     The Rerun file is written to --save, or next to REC (<REC stem>.rrd; two recordings:
     <REC stem>_vs_<REC2 stem>.rrd). The viewer opens on it when it can run (the rerun
     binary of rerun-sdk and a display); otherwise the command says so and where the file
-    is. Open it later with `rerun FILE.rrd`.
+    is. Open it later with `rerun FILE.rrd`. --web serves the web viewer on
+    http://127.0.0.1:PORT (this machine only, unless --allow-remote) until Ctrl-C.
 
     \b
     Examples:
       aeroexec view flight.mcap
       aeroexec view base.mcap replay.mcap --save diff.rrd
-      aeroexec view flight.mcap --web
+      aeroexec view flight.bag --web --port 9091
 
-    Exit codes: 0 written (and viewer started when asked); 2 a recording could not be read
-    (not MCAP, not an aeroexec recording, nothing readable) or the file not written.
+    Exit codes: 0 written (and viewer started when asked); 1 the web viewer failed while
+    serving; 2 a recording could not be read (not MCAP, not an aeroexec recording, nothing
+    readable), the file not written or the web viewer's port taken; 128+N stopped by
+    signal N (the web viewer with it).
     """
+    if not web and (port is not None or allow_remote):
+        raise AeroexecError("--port and --allow-remote are for the web viewer: add --web")
     output = save if save is not None else _default_output(recording, other)
     inputs = [recording] if other is None else [recording, other]
 
@@ -125,8 +160,16 @@ def view(
             f"aeroexec: viewer not started: {reason}. Open the file with `rerun {report.output}`"
         )
         return
-    if web:
-        typer.echo("serving the web viewer (Ctrl-C to stop)")
-    else:
+    if not web:
         typer.echo("opening the Rerun viewer")
-    viewer.open_viewer(report.output, web=web)
+        viewer.open_viewer(report.output)
+        return
+    status = viewer.serve_web(
+        report.output,
+        bind=viewer.ALL_INTERFACES if allow_remote else viewer.LOOPBACK,
+        port=DEFAULT_WEB_PORT if port is None else port,
+        on_ready=lambda url, _pid: typer.echo(f"serving the web viewer at {url} (Ctrl-C to stop)"),
+    )
+    if status != 0:
+        error_line(f"aeroexec: error: the web viewer ended with exit status {status}")
+        raise typer.Exit(1)

@@ -31,6 +31,7 @@ from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
+    from aeroexec.vehicles.world import World
 
 
 @dataclass(frozen=True)
@@ -82,9 +83,11 @@ def session_observers(
     attachments: dict[str, str],
     observers: Iterable[BusObserver],
     records: Mapping[str, Mapping[str, str]] | None = None,
+    world: World | None = None,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
-    recorder when one is asked for (the caller closes it)."""
+    recorder when one is asked for (the caller closes it). `world`: what the vehicle
+    flies in, drawn in the recording's 3D scene."""
     activity = ActivityLog()
     everyone: list[BusObserver] = [activity, *observers]
     recorder = None
@@ -92,7 +95,12 @@ def session_observers(
         from aeroexec.recording import Recorder
 
         recorder = Recorder(
-            record, drone=drone, metadata=metadata, attachments=attachments, records=records
+            record,
+            drone=drone,
+            metadata=metadata,
+            attachments=attachments,
+            records=records,
+            world=world,
         )
         everyone.append(recorder)
     return activity, everyone, recorder
@@ -180,7 +188,13 @@ def simulate(
         **code.attachments,
     }
     activity, all_observers, recorder = session_observers(
-        config.record, config.drone, metadata, attachments, observers, code.records
+        config.record,
+        config.drone,
+        metadata,
+        attachments,
+        observers,
+        code.records,
+        vehicle.world,
     )
     try:
         executive = Executive(

@@ -321,7 +321,8 @@ def _typed(channel: ChannelInfo, log_time_ns: int, data: Any) -> Record | None:
                 topic=channel.topic,
                 log_time_ns=log_time_ns,
                 seq=int(data["seq"]),
-                parent_seq=data["parent_seq"],
+                # Absent at the top (null in older recordings).
+                parent_seq=_parent_seq(data.get("parent_seq")),
                 caller=str(data["caller"]),
                 service=str(data["service"]),
                 request=dict(data["request"]),
@@ -330,6 +331,10 @@ def _typed(channel: ChannelInfo, log_time_ns: int, data: Any) -> Record | None:
         except (KeyError, TypeError, ValueError):
             return None
     return RecordedTopic(channel.topic, _strip_namespace(channel.topic), log_time_ns, data)
+
+
+def _parent_seq(value: Any) -> int | None:
+    return value if isinstance(value, int) and not isinstance(value, bool) else None
 
 
 def open_recording(path: str | os.PathLike[str]) -> Recording:

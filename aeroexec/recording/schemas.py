@@ -1,12 +1,23 @@
 """The JSON Schemas of the aeroexec MCAP profile, one per kind of channel.
 
 Every channel of an aeroexec recording carries a schema (encoding `jsonschema`) so that
-Foxglove, the `mcap` CLI and any JSON Schema validator can check its messages. The
-executive's own payloads are described by their required fields and stay open
-(`additionalProperties` allowed): a later core version may add a field without making
-older readers reject the file. The two Foxglove well-known schemas (`foxglove.Log`,
-`foxglove.PoseInFrame`) follow Foxglove's published field layout so its Log and 3D
-panels recognize the channels.
+Foxglove, Lichtblick, the `mcap` CLI and any JSON Schema validator can check its
+messages. The executive's own payloads are described by their required fields and stay
+open (`additionalProperties` allowed): a later core version may add a field without
+making older readers reject the file.
+
+**The viewers' dialect.** Foxglove Studio and Lichtblick turn a channel's schema into
+message datatypes with their own `parseJsonSchema`, which accepts a narrow part of JSON
+Schema and hides a channel whose schema it rejects. So every schema here keeps to it: one
+`type` string per field (never `["integer", "null"]`: a value that can be absent is a
+key left out, not a null), `enum` only beside a `type`, `properties` on every object
+(`{}` for a free-form one), `items` on every array, `oneOf` only of numeric `const`s.
+`tests/test_foxglove_compat.py` runs both viewers' parsers on every schema.
+
+Foxglove's well-known schemas: `foxglove.Log` follows Foxglove's field layout;
+`foxglove.FrameTransform` and `foxglove.SceneUpdate` are Foxglove's own files, shipped
+unchanged in `aeroexec/data/foxglove/` and written without their descriptions, so the
+Log and 3D panels recognize the channels.
 
 Each schema's bytes are produced once, with sorted keys and no whitespace, so the same
 code always writes the same schema record.
@@ -16,6 +27,8 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
 from typing import Any
 
 #: The MCAP header profile of an aeroexec recording.
@@ -33,7 +46,15 @@ MISSION_COMMAND = "aeroexec.MissionCommand"
 VEHICLE_STATE = "aeroexec.VehicleState"
 GENERIC_TOPIC = "aeroexec.Topic"
 FOXGLOVE_LOG = "foxglove.Log"
-FOXGLOVE_POSE = "foxglove.PoseInFrame"
+FOXGLOVE_FRAME_TRANSFORM = "foxglove.FrameTransform"
+FOXGLOVE_SCENE_UPDATE = "foxglove.SceneUpdate"
+
+#: Foxglove's own schema files, shipped unchanged (see aeroexec/data/foxglove/SOURCES.md).
+FOXGLOVE_SCHEMA_DIR = Path(__file__).resolve().parent.parent / "data" / "foxglove"
+FOXGLOVE_FILES: dict[str, str] = {
+    FOXGLOVE_FRAME_TRANSFORM: "FrameTransform.json",
+    FOXGLOVE_SCENE_UPDATE: "SceneUpdate.json",
+}
 
 _TIME: dict[str, Any] = {
     "type": "object",
@@ -51,6 +72,9 @@ _VECTOR3: dict[str, Any] = {
     "minItems": 3,
     "maxItems": 3,
 }
+
+#: An object whose keys are the caller's (behavior arguments, a service's request).
+_FREE_OBJECT: dict[str, Any] = {"type": "object", "properties": {}}
 
 _EVENT_CODES = [
     "GOAL_ACHIEVED",
@@ -79,20 +103,22 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     SERVICE_CALL: _object(
         SERVICE_CALL,
         "A completed service call of the executive. seq is the call's start order; "
-        "parent_seq the call it happened inside (null at the top).",
+        "parent_seq the call it happened inside (absent for a call made at the top).",
         {
             "seq": {"type": "integer", "minimum": 0},
-            "parent_seq": {"type": ["integer", "null"], "minimum": 0},
+            "parent_seq": {"type": "integer", "minimum": 0},
             "caller": {"type": "string"},
             "service": {"type": "string"},
-            "request": {"type": "object"},
+            "request": _FREE_OBJECT,
             "response": {
                 "type": "object",
                 "properties": {"ok": {"type": "boolean"}, "error": {"type": "string"}},
                 "required": ["ok", "error"],
             },
+            # Imported from a bag: a call the importer inferred (bags hold no calls).
+            "reconstructed": {"type": "boolean"},
         },
-        ["seq", "parent_seq", "caller", "service", "request", "response"],
+        ["seq", "caller", "service", "request", "response"],
     ),
     BEHAVIOR_EVENT: _object(
         BEHAVIOR_EVENT,
@@ -100,8 +126,11 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         {
             "name": {"type": "string"},
             "uid": {"type": "integer"},
-            "code": {"enum": _EVENT_CODES},
+            "code": {"type": "string", "enum": _EVENT_CODES},
             "detail": {"type": "string"},
+            # Imported from a bag: the event was inferred, or the uid the bag gave it.
+            "reconstructed": {"type": "boolean"},
+            "bag_uid": {"type": "number"},
         },
         ["name", "uid", "code"],
     ),
@@ -125,7 +154,9 @@ SCHEMAS: dict[str, dict[str, Any]] = {
                     },
                     "required": ["name", "references"],
                 },
-            }
+            },
+            # Imported from a bag, whose list has no reference counts: false.
+            "counts_known": {"type": "boolean"},
         },
         ["capabilities"],
     ),
@@ -143,11 +174,17 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     ),
     MISSION_COMMAND: _object(
         MISSION_COMMAND,
-        "An external input: what the mission asked of the executive, and when.",
+        "An external input: what the mission asked of the executive, and when. The "
+        "fields besides command are those the command takes.",
         {
             "command": {"type": "string"},
-            "behavior": {"type": ["string", "null"]},
-            "arguments": {"type": ["object", "null"]},
+            "behavior": {"type": "string"},
+            "arguments": _FREE_OBJECT,
+            "query": {"type": "string"},
+            "belief": {"type": "string"},
+            # Imported from a bag: the command was inferred from the active list, and how.
+            "reconstructed": {"type": "boolean"},
+            "evidence": {"type": "string"},
         },
         ["command"],
     ),
@@ -162,6 +199,8 @@ SCHEMAS: dict[str, dict[str, Any]] = {
             "flying": {"type": "boolean"},
             "armed": {"type": "boolean"},
             "fault": {"type": "string"},
+            # Imported from a bag: the fields the bag did not give, filled with defaults.
+            "defaulted": {"type": "array", "items": {"type": "string"}},
         },
         ["position", "velocity", "yaw", "battery", "flying"],
     ),
@@ -192,35 +231,6 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         },
         "required": ["timestamp", "level", "message", "name", "file", "line"],
     },
-    FOXGLOVE_POSE: {
-        "title": FOXGLOVE_POSE,
-        "description": "A timestamped pose for an object or reference frame in 3D space",
-        "type": "object",
-        "properties": {
-            "timestamp": _TIME,
-            "frame_id": {"type": "string"},
-            "pose": {
-                "title": "foxglove.Pose",
-                "type": "object",
-                "properties": {
-                    "position": {
-                        "title": "foxglove.Vector3",
-                        "type": "object",
-                        "properties": {a: {"type": "number"} for a in "xyz"},
-                        "required": ["x", "y", "z"],
-                    },
-                    "orientation": {
-                        "title": "foxglove.Quaternion",
-                        "type": "object",
-                        "properties": {a: {"type": "number"} for a in "xyzw"},
-                        "required": ["x", "y", "z", "w"],
-                    },
-                },
-                "required": ["position", "orientation"],
-            },
-        },
-        "required": ["timestamp", "frame_id", "pose"],
-    },
 }
 
 #: Topic (relative to `/<drone>/`) -> schema name. Services all use SERVICE_CALL; a topic
@@ -233,8 +243,10 @@ TOPIC_SCHEMAS: dict[str, str] = {
     "beliefs": BELIEF_CHANGE,
     "mission/command": MISSION_COMMAND,
     "vehicle/state": VEHICLE_STATE,
-    "vehicle/pose": FOXGLOVE_POSE,
+    "vehicle/transform": FOXGLOVE_FRAME_TRANSFORM,
+    "scene": FOXGLOVE_SCENE_UPDATE,
     "log": FOXGLOVE_LOG,
+    "call_log": FOXGLOVE_LOG,
 }
 
 #: foxglove.LogLevel values by name (Python's logging names included).
@@ -255,10 +267,53 @@ class SchemaDef:
     data: bytes
 
 
+def schema_document(name: str) -> dict[str, Any]:
+    """The JSON Schema named `name` (KeyError for a name outside the profile)."""
+    if name in FOXGLOVE_FILES:
+        return _foxglove_document(name)
+    return SCHEMAS[name]
+
+
+@cache
+def _foxglove_document(name: str) -> dict[str, Any]:
+    """Foxglove's schema file without its prose: every schema in every recording carries
+    it (twice: in a chunk and in the summary), and SceneUpdate's descriptions are half of
+    its 21 kB. The definitions (types, fields, required, titles) are Foxglove's."""
+    document: dict[str, Any] = json.loads(
+        (FOXGLOVE_SCHEMA_DIR / FOXGLOVE_FILES[name]).read_text(encoding="utf-8")
+    )
+    return _without_prose(document)
+
+
+_PROSE = frozenset({"description", "$comment"})
+
+
+def _without_prose(schema: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in schema.items():
+        if key in _PROSE:
+            continue
+        if key == "properties":  # field names -> schemas (a field may be named "description")
+            out[key] = {field: _without_prose(sub) for field, sub in value.items()}
+        elif key == "items" and isinstance(value, dict):
+            out[key] = _without_prose(value)
+        elif key == "oneOf":
+            out[key] = [_without_prose(sub) for sub in value]
+        else:
+            out[key] = value
+    return out
+
+
+@cache
 def schema_for(name: str) -> SchemaDef:
     """The schema record content for `name` (compact, key-sorted JSON)."""
-    text = json.dumps(SCHEMAS[name], sort_keys=True, separators=(",", ":"))
+    text = json.dumps(schema_document(name), sort_keys=True, separators=(",", ":"))
     return SchemaDef(name, text.encode())
+
+
+def profile_schema_names() -> list[str]:
+    """Every schema the profile writes."""
+    return [*SCHEMAS, *FOXGLOVE_FILES]
 
 
 def schema_name_for_topic(topic: str) -> str:

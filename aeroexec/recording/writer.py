@@ -10,10 +10,12 @@
 The file (see docs/recording.md): profile `aeroexec`, JSON messages with one JSON Schema
 per channel, channels `/<drone>/<service>` (one per service, the completed call) and
 `/<drone>/<topic>` (behavior_event, list_of_active_behaviors, list_of_active_capabilities,
-process_state, beliefs, mission/command, vehicle/state, log as `foxglove.Log`) plus
-`/<drone>/vehicle/pose` (`foxglove.PoseInFrame`, derived from vehicle/state). Channels are
-created when first used, so their ids follow first-use order. Log time and publish time
-are the record's clock time; the MCAP sequence number counts messages from 0.
+process_state, beliefs, mission/command, vehicle/state, log as `foxglove.Log`) plus what
+Foxglove's panels need (foxglove.py): `vehicle/transform` (`foxglove.FrameTransform`, one
+per vehicle/state), `scene` (`foxglove.SceneUpdate`: the vehicle's body and the world) and
+`call_log` (`foxglove.Log`, one line per top-level call). Channels are created when first
+used, so their ids follow first-use order. Log time and publish time are the record's
+clock time; the MCAP sequence number counts messages from 0.
 
 **Deterministic.** Nothing depends on the wall clock, the host or chance: attachments
 carry log/create time 0, the header names only the aeroexec and mcap-python versions, chunks
@@ -41,9 +43,8 @@ import os
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, is_dataclass
 from enum import Enum
-from math import cos, isfinite, sin
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from mcap.writer import CompressionType, Writer
 from mcap.writer import __version__ as MCAP_VERSION
@@ -51,8 +52,16 @@ from mcap.writer import __version__ as MCAP_VERSION
 from aeroexec import __version__
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.recording.foxglove import (
+    call_log_message,
+    first_scene,
+    object_entity,
+    object_period_ns,
+    scene_update,
+    state_transform,
+    vehicle_frame,
+)
 from aeroexec.recording.schemas import (
-    FOXGLOVE_POSE,
     LOG_LEVELS,
     MESSAGE_ENCODING,
     PROFILE,
@@ -62,14 +71,15 @@ from aeroexec.recording.schemas import (
     schema_name_for_topic,
 )
 
+if TYPE_CHECKING:
+    from aeroexec.vehicles.world import World
+
 #: Flush bound, in messages (see the module docstring).
 FLUSH_MESSAGES = 100
 #: Flush bound, in clock nanoseconds (see the module docstring).
 FLUSH_INTERVAL_NS = 500_000_000
 #: The metadata record's name.
 METADATA_NAME = "aeroexec"
-#: The frame `vehicle/pose` is expressed in (local ENU, the simulator's world frame).
-POSE_FRAME = "world"
 LIBRARY = f"aeroexec/{__version__} mcap-python/{MCAP_VERSION}"
 
 _COMPRESSIONS = {
@@ -179,23 +189,23 @@ def log_message(data: Mapping[str, Any], log_time_ns: int) -> dict[str, Any]:
     }
 
 
-def pose_message(state: Mapping[str, Any], log_time_ns: int) -> dict[str, Any] | None:
-    """A `foxglove.PoseInFrame` from a `vehicle/state` payload (None if it has no pose)."""
-    try:
-        px, py, pz = state["position"]
-        x, y, z, yaw = float(px), float(py), float(pz), float(state.get("yaw", 0.0))
-    except (KeyError, TypeError, ValueError):
-        return None
-    if not (isfinite(x) and isfinite(y) and isfinite(z) and isfinite(yaw)):
-        return None
-    return {
-        "timestamp": _stamp(log_time_ns),
-        "frame_id": POSE_FRAME,
-        "pose": {
-            "position": {"x": x, "y": y, "z": z},
-            "orientation": {"x": 0.0, "y": 0.0, "z": sin(yaw / 2), "w": cos(yaw / 2)},
-        },
+def call_message(record: ServiceCallRecord) -> dict[str, Any]:
+    """A completed call as recorded: `parent_seq` only for a call made inside another."""
+    data = {
+        "seq": record.seq,
+        "caller": record.caller,
+        "service": record.service,
+        "request": record.request,
+        "response": record.response,
     }
+    if record.parent_seq is not None:
+        data["parent_seq"] = record.parent_seq
+    return data
+
+
+def without_nulls(data: Mapping[str, Any]) -> dict[str, Any]:
+    """The payload without its absent (None) fields: the schemas leave such keys out."""
+    return {k: v for k, v in data.items() if v is not None}
 
 
 def _media_type(name: str) -> str:
@@ -218,6 +228,7 @@ class Recorder:
         flush_messages: int = FLUSH_MESSAGES,
         flush_interval_ns: int = FLUSH_INTERVAL_NS,
         compression: str = "lz4",
+        world: World | None = None,
     ) -> None:
         if flush_messages < 1 or flush_interval_ns < 0:
             raise ValueError("flush bounds must be positive")
@@ -244,6 +255,14 @@ class Recorder:
         #: service -> channel id, topic (inside the namespace) -> channel id
         self._services: dict[str, int] = {}
         self._topics: dict[str, int] = {}
+        #: The scene: written with the first vehicle state; a moving object follows.
+        self._world = world
+        self._vehicle_frame = vehicle_frame(self.drone)
+        self._scene_written = False
+        period = object_period_ns(world)
+        #: (the object to follow, how often its entity is sent again) when it moves
+        self._moving = (world.object, period) if world and world.object and period else None
+        self._object_due_ns = 0
         self._count = 0
         self._pending = 0
         self._pending_since = 0
@@ -266,7 +285,12 @@ class Recorder:
             channel = self._services[record.service] = self._channel(
                 self._prefix + record.service, SERVICE_CALL
             )
-        self._write(channel, record.log_time_ns, encode_json(record.as_dict()))
+        data = call_message(record)
+        self._write(channel, record.log_time_ns, encode_json(data))
+        if record.parent_seq is None:
+            self._derived(
+                "call_log", record.log_time_ns, call_log_message(data, record.log_time_ns)
+            )
 
     def on_topic(self, record: TopicRecord) -> None:
         self.write_topic(record.topic, record.data, record.log_time_ns)
@@ -281,16 +305,11 @@ class Recorder:
             )
         if topic == "log":
             data = log_message(data, log_time_ns)
+        elif topic == "mission/command":
+            data = without_nulls(data)
         self._write(channel, log_time_ns, encode_json(data))
         if topic == "vehicle/state":
-            pose = pose_message(data, log_time_ns)
-            if pose is not None:
-                channel = self._topics.get("vehicle/pose")
-                if channel is None:
-                    channel = self._topics["vehicle/pose"] = self._channel(
-                        self._prefix + "vehicle/pose", FOXGLOVE_POSE
-                    )
-                self._write(channel, log_time_ns, encode_json(pose))
+            self._vehicle_derived(data, log_time_ns)
 
     @property
     def messages_written(self) -> int:
@@ -332,6 +351,32 @@ class Recorder:
         self.close()
 
     # -- internals -----------------------------------------------------------------------
+    def _derived(self, topic: str, log_time_ns: int, data: Mapping[str, Any]) -> None:
+        """A message derived from what was recorded (not itself published on the bus)."""
+        channel = self._topics.get(topic)
+        if channel is None:
+            channel = self._topics[topic] = self._channel(
+                self._prefix + topic, schema_name_for_topic(topic)
+            )
+        self._write(channel, log_time_ns, encode_json(data))
+
+    def _vehicle_derived(self, state: Mapping[str, Any], log_time_ns: int) -> None:
+        """The frame transform of each state; the scene with the first; the moving object
+        again each time it has moved OBJECT_STEP_M (at the first state after that)."""
+        transform = state_transform(state, log_time_ns, self._vehicle_frame)
+        if transform is not None:
+            self._derived("vehicle/transform", log_time_ns, transform)
+        if not self._scene_written:
+            self._scene_written = True
+            self._derived("scene", log_time_ns, first_scene(log_time_ns, self.drone, self._world))
+            if self._moving is not None:
+                self._object_due_ns = log_time_ns + self._moving[1]
+        elif self._moving is not None and log_time_ns >= self._object_due_ns:
+            moving, period = self._moving
+            self._object_due_ns += period * (1 + (log_time_ns - self._object_due_ns) // period)
+            where = moving.at(log_time_ns / 1e9)
+            self._derived("scene", log_time_ns, scene_update([object_entity(log_time_ns, where)]))
+
     def _start(
         self,
         metadata: dict[str, object],

@@ -150,7 +150,7 @@ def _replay_commands(
     metadata.update(stand_in_metadata(code))
     attachments = {"catalog.yaml": catalog.text, "world.yaml": world[0], **code.attachments}
     _, observers, recorder = session_observers(
-        output, drone, metadata, attachments, [observer], code.records
+        output, drone, metadata, attachments, [observer], code.records, vehicle.world
     )
     try:
         executive = Executive(

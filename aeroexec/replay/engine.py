@@ -13,6 +13,7 @@ report says so.
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
@@ -66,6 +67,9 @@ class ReplayResult:
     notes: tuple[str, ...] = ()
     #: Behaviors whose code is not the code the recording ran (class or source changed).
     code_changes: tuple[str, ...] = ()
+    #: Wall-clock seconds the replay took (JUnit's `time`); not part of the result's
+    #: value: equal results compare equal however long they took.
+    seconds: float | None = field(default=None, compare=False)
 
     @property
     def equal(self) -> bool:
@@ -181,12 +185,15 @@ def choose_behaviors(
 
 
 def replay_file(path: str, options: ReplayOptions) -> ReplayResult:
-    """`replay_recording`, with input problems as a result (for batches and workers)."""
+    """`replay_recording`, with input problems as a result (for batches and workers),
+    and the time it took."""
+    started = time.perf_counter()
     try:
-        return replay_recording(path, options)
+        result = replay_recording(path, options)
     except AeroexecError as exc:
         text = exc.message if exc.mark is not None and exc.mark.file == path else str(exc)
-        return ReplayResult(recording=path, error=text, mode=_mode_name(options))
+        result = ReplayResult(recording=path, error=text, mode=_mode_name(options))
+    return replace(result, seconds=time.perf_counter() - started)
 
 
 def _mode_name(options: ReplayOptions) -> str | None:

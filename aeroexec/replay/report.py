@@ -2,22 +2,71 @@
 
 Text is for a reviewer's ten seconds: one header line per recording, then one line per
 difference saying which command, what changed and why. JSON is one object with `equal`
-and `differences` (flattened, each naming its recording). JUnit XML is one testsuite
-with one testcase per recording (replay) or one for the pair (diff); differences are a
-`<failure>`, an unreadable recording an `<error>`. Nothing depends on timing, so the
-same results always render the same bytes.
+and `differences` (flattened, each naming its recording); nothing in it depends on
+timing, so the same results always render the same bytes.
+
+JUnit XML is one testsuite with one testcase per recording (replay) or one for the pair
+(diff); differences are a `<failure>`, an unreadable recording an `<error>`. Each
+testcase names its recording in `file` (test-report actions on GitHub annotate that
+file, else they guess from `classname`) and its duration in `time`; the suite has the
+`timestamp` of the run (UTC) and its `time`. Those make two runs' reports differ, as
+JUnit reports do — unless `SOURCE_DATE_EPOCH` is set (the reproducible-builds
+convention): then the timestamp is that instant and every duration 0, so the same
+results render the same bytes again.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import time
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from datetime import datetime, timezone
 
+from aeroexec.errors import AeroexecError
 from aeroexec.replay.diff import DiffResult
 from aeroexec.replay.engine import ReplayResult
 
 MODE_NAMES = {"closed": "closed-loop replay", "open": "open-loop replay"}
+SOURCE_DATE_EPOCH = "SOURCE_DATE_EPOCH"
+
+
+@dataclass(frozen=True, slots=True)
+class Timing:
+    """When a run started (the JUnit suite's `timestamp`) and whether durations are
+    reported (not when SOURCE_DATE_EPOCH asks for reproducible output)."""
+
+    timestamp: str
+    reproducible: bool = False
+
+    def duration(self, seconds: float | None) -> str:
+        if self.reproducible or seconds is None:
+            return "0.000"
+        return f"{max(seconds, 0.0):.3f}"
+
+
+def start_timing(environ: Mapping[str, str] | None = None, now: float | None = None) -> Timing:
+    """The timing of a run starting now: the wall clock in UTC, or SOURCE_DATE_EPOCH
+    (seconds since 1970) when set. A malformed value is an error, as the convention asks."""
+    env = os.environ if environ is None else environ
+    epoch = env.get(SOURCE_DATE_EPOCH)
+    if epoch is not None:
+        try:
+            instant = int(epoch)
+        except ValueError:
+            raise AeroexecError(
+                f"{SOURCE_DATE_EPOCH} must be whole seconds since 1970, got '{epoch}'"
+            ) from None
+        return Timing(_iso(instant), reproducible=True)
+    return Timing(_iso(time.time() if now is None else now))
+
+
+def _iso(seconds: float) -> str:
+    # JUnit's schema wants a local date-time without zone; aeroexec writes UTC.
+    instant = datetime.fromtimestamp(int(seconds), tz=timezone.utc)
+    return instant.strftime("%Y-%m-%dT%H:%M:%S")
 
 
 def _count(n: int, word: str) -> str:
@@ -90,13 +139,20 @@ def replay_json(results: Sequence[ReplayResult]) -> str:
     return json.dumps(document, indent=2)
 
 
-def replay_junit(results: Sequence[ReplayResult], suite: str = "aeroexec replay") -> str:
-    root = _suite(suite, len(results))
+def replay_junit(
+    results: Sequence[ReplayResult],
+    suite: str = "aeroexec replay",
+    *,
+    timing: Timing | None = None,
+    seconds: float | None = None,
+) -> str:
+    """`timing`: when the run started (default: now); `seconds`: how long it took."""
+    timing = timing or start_timing()
+    root = _suite(suite, len(results), timing, seconds)
     failures = errors = 0
     for result in results:
-        case = ET.SubElement(
-            root, "testcase", {"classname": "aeroexec.replay", "name": result.recording}
-        )
+        case = _case(root, "aeroexec.replay", result.recording, result.recording)
+        case.set("time", timing.duration(result.seconds))
         if result.diff is None:
             errors += 1
             error = ET.SubElement(case, "error", {"message": result.error or "", "type": "input"})
@@ -121,11 +177,14 @@ def diff_json(diff: DiffResult) -> str:
     return json.dumps(diff.as_dict(), indent=2)
 
 
-def diff_junit(diff: DiffResult) -> str:
-    root = _suite("aeroexec diff", 1)
-    case = ET.SubElement(
-        root, "testcase", {"classname": "aeroexec.diff", "name": f"{diff.base} -> {diff.new}"}
-    )
+def diff_junit(
+    diff: DiffResult, *, timing: Timing | None = None, seconds: float | None = None
+) -> str:
+    """The pair as one testcase, attached to the NEW recording (the one judged)."""
+    timing = timing or start_timing()
+    root = _suite("aeroexec diff", 1, timing, seconds)
+    case = _case(root, "aeroexec.diff", f"{diff.base} -> {diff.new}", diff.new)
+    case.set("time", timing.duration(seconds))
     failures = 0
     if not diff.equal:
         failures = 1
@@ -134,8 +193,20 @@ def diff_junit(diff: DiffResult) -> str:
 
 
 # -- JUnit plumbing ------------------------------------------------------------------------
-def _suite(name: str, tests: int) -> ET.Element:
-    return ET.Element("testsuite", {"name": name, "tests": str(tests)})
+def _suite(name: str, tests: int, timing: Timing, seconds: float | None) -> ET.Element:
+    return ET.Element(
+        "testsuite",
+        {
+            "name": name,
+            "tests": str(tests),
+            "timestamp": timing.timestamp,
+            "time": timing.duration(seconds),
+        },
+    )
+
+
+def _case(root: ET.Element, classname: str, name: str, file: str) -> ET.Element:
+    return ET.SubElement(root, "testcase", {"classname": classname, "name": name, "file": file})
 
 
 def _failure(case: ET.Element, diff: DiffResult, notes: Sequence[str], header: str) -> None:

@@ -1,26 +1,58 @@
-"""Rerun views of aeroexec recordings (`aeroexec view`).
+"""Views of aeroexec recordings: Rerun (`aeroexec view`) and Foxglove (`aeroexec layout`).
 
 - `write_view` (view.py): one recording, or two side by side, into an `.rrd` file;
 - `Layout` (layout.py): the entity tree, the one place paths are defined;
 - `SessionConverter` (convert.py): records to rows, streaming;
 - `build_blueprint` (blueprint.py): the layout the viewer opens on;
-- viewer.py: finding and starting the Rerun viewer.
+- viewer.py: finding and starting the Rerun viewer;
+- foxglove_layout.py: the Foxglove/Lichtblick layout for aeroexec recordings.
+
+The names below are imported on first use: rerun takes about half a second to import,
+and viewer.py and foxglove_layout.py need none of it.
 """
 
 from __future__ import annotations
 
-from aeroexec.viz.blueprint import build_blueprint
-from aeroexec.viz.convert import ConvertStats, SessionConverter
-from aeroexec.viz.layout import DIFF_ROOTS, Layout, layouts_for
-from aeroexec.viz.view import (
-    APPLICATION_ID,
-    SourceReport,
-    ViewReport,
-    default_output,
-    open_session,
-    recording_id_for,
-    write_view,
-)
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from aeroexec.viz.blueprint import build_blueprint
+    from aeroexec.viz.convert import ConvertStats, SessionConverter
+    from aeroexec.viz.layout import DIFF_ROOTS, Layout, layouts_for
+    from aeroexec.viz.view import (
+        APPLICATION_ID,
+        SourceReport,
+        ViewReport,
+        default_output,
+        open_session,
+        recording_id_for,
+        write_view,
+    )
+
+_HOMES = {
+    "build_blueprint": "blueprint",
+    "ConvertStats": "convert",
+    "SessionConverter": "convert",
+    "DIFF_ROOTS": "layout",
+    "Layout": "layout",
+    "layouts_for": "layout",
+    "APPLICATION_ID": "view",
+    "SourceReport": "view",
+    "ViewReport": "view",
+    "default_output": "view",
+    "open_session": "view",
+    "recording_id_for": "view",
+    "write_view": "view",
+}
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"aeroexec.viz.{home}"), name)
+
 
 __all__ = [
     "APPLICATION_ID",

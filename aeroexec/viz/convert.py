@@ -8,6 +8,16 @@ and the service calls of the call tree under way: memory does not grow with the 
 Times: `sim_time` is the log time relative to the session start (the executive clock:
 0 for a simulated session, whose clock starts at 0; the first message's time otherwise),
 so two sessions line up. Service-call rows are also on the `seq` timeline.
+
+One value per instant: a plot series never gets two rows at one `sim_time` (Rerun's plot
+would draw their average, a level that never happened). When a series changes twice in
+one instant (a behavior preempted the tick it starts, a capability released and taken
+again by the next behavior), the second row goes 1 ns after the first, so the plot shows
+the drop and the rise; the behavior's state lane moves with it.
+
+The vehicle's pose comes from `vehicle/state` (position and yaw), which every recording
+has; the pose channels Foxglove reads (`vehicle/transform`, or `vehicle/pose` in older
+recordings) carry the same values and are not read.
 """
 
 from __future__ import annotations
@@ -19,6 +29,7 @@ from typing import Any
 
 import rerun as rr
 
+from aeroexec.recording.foxglove import OBJECT_COLOR
 from aeroexec.recording.reader import RecordedCall, RecordedTopic, Recording
 from aeroexec.vehicles.world import World
 from aeroexec.viz import texts
@@ -71,7 +82,6 @@ class SessionConverter:
         origin_ns: int = 0,
         world: World | None = None,
         color: tuple[int, int, int] = (66, 133, 244),
-        pose_from_state: bool = False,
     ) -> None:
         self._stream = stream
         self._w = writer
@@ -79,13 +89,13 @@ class SessionConverter:
         self._origin = origin_ns
         self._world = world
         self._color = color
-        self._pose_from_state = pose_from_state
         self._behaviors = BehaviorIntervals()
         self._capabilities = CapabilityCounts()
         self._calls = CallTree()
         self._previous: tuple[float, float, float] | None = None
         self._fault = ""
         self._styled: set[str] = set()
+        #: entity -> (time, value) of its last row
         self._last_values: dict[str, tuple[int, float]] = {}
         self.stats = ConvertStats()
 
@@ -164,9 +174,10 @@ class SessionConverter:
 
     def _transitions(self, transitions: list[Transition]) -> None:
         for tr in transitions:
-            self._scalar(self._layout.behavior_active(tr.name), tr.t_ns, 1.0 if tr.active else 0.0)
+            entity = self._layout.behavior_active(tr.name)
+            t = self._scalar(entity, tr.t_ns, 1.0 if tr.active else 0.0)
             state = (tr.label or "active") if tr.active else ""
-            self._w.row(self._layout.behavior_state(tr.name), rr.StateChange, tr.t_ns, state=state)
+            self._w.row(self._layout.behavior_state(tr.name), rr.StateChange, t, state=state)
 
     def _active_capabilities(self, data: Any, t: int) -> None:
         capabilities = data.get("capabilities") if isinstance(data, dict) else None
@@ -201,30 +212,23 @@ class SessionConverter:
             self._scalar(layout.telemetry("speed"), t, math.hypot(*velocity))
         if self._world is not None and self._world.object is not None:
             where = self._world.object.at(t / 1e9)
-            self._w.row(layout.object, rr.Points3D, t, positions=where, labels="object")
+            self._w.row(
+                layout.object,
+                rr.Points3D,
+                t,
+                positions=where,
+                labels="object",
+                colors=OBJECT_COLOR,
+            )
         fault = str(data.get("fault", "") or "")
         if fault != self._fault:
             text = f"vehicle fault: {fault}" if fault else f"vehicle fault cleared: {self._fault}"
             level = texts.ERROR if fault else texts.INFO
             self._w.row(layout.errors, rr.TextLog, t, text=text, level=level)
             self._fault = fault
-        if self._pose_from_state:
-            yaw = data.get("yaw")
-            yaw = float(yaw) if isinstance(yaw, (int, float)) else 0.0
-            quaternion = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
-            self._pose(position, quaternion, t)
-
-    def _vehicle_pose(self, data: Any, t: int) -> None:
-        pose = data.get("pose") if isinstance(data, dict) else None
-        if not isinstance(pose, dict):
-            return
-        p = pose.get("position") or {}
-        q = pose.get("orientation") or {}
-        try:
-            position = (float(p["x"]), float(p["y"]), float(p["z"]))
-            quaternion = (float(q["x"]), float(q["y"]), float(q["z"]), float(q["w"]))
-        except (KeyError, TypeError, ValueError):
-            return
+        yaw = data.get("yaw")
+        yaw = float(yaw) if isinstance(yaw, (int, float)) and math.isfinite(yaw) else 0.0
+        quaternion = (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
         self._pose(position, quaternion, t)
 
     def _pose(
@@ -253,17 +257,21 @@ class SessionConverter:
         text, level = row
         self._w.row(entity, rr.TextLog, t, text=text, level=level)
 
-    def _scalar(self, entity: str, t: int, value: float, *, extend: bool = False) -> None:
-        """One row of a step series; `extend` adds the closing row only when the series
-        has one and ends earlier."""
+    def _scalar(self, entity: str, t: int, value: float, *, extend: bool = False) -> int:
+        """One row of a step series, at `t` or, when the series already has a row at or
+        after `t`, 1 ns after that row (one value per instant); the row's time.
+        `extend` adds the closing row only when the series has one and ends earlier."""
         last = self._last_values.get(entity)
         if extend and (last is None or last[0] >= t):
-            return
+            return t
+        if last is not None and t <= last[0]:
+            t = last[0] + 1
         if entity not in self._styled:
             self._styled.add(entity)
             log_series_style(self._stream, entity, entity.rsplit("/", 1)[-1])
         self._w.row(entity, rr.Scalars, t, scalars=value)
         self._last_values[entity] = (t, value)
+        return t
 
 
 def _vector(value: Any) -> tuple[float, float, float] | None:
@@ -281,7 +289,6 @@ _TOPIC_HANDLERS: dict[str, Callable[[SessionConverter, Any, int], None]] = {
     "list_of_active_capabilities": SessionConverter._active_capabilities,
     "process_state": SessionConverter._process_state,
     "vehicle/state": SessionConverter._vehicle_state,
-    "vehicle/pose": SessionConverter._vehicle_pose,
     "mission/command": SessionConverter._mission,
     "log": SessionConverter._log,
     "beliefs": SessionConverter._belief,

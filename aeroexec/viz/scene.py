@@ -10,18 +10,20 @@ from __future__ import annotations
 import rerun as rr
 
 from aeroexec.errors import WorldError
+from aeroexec.recording.foxglove import (
+    BODY_HALF_SIZE,
+    MARKER_COLOR,
+    MARKER_HALF_SIZE,
+    VEHICLE_COLOR,
+)
 from aeroexec.recording.reader import Recording
 from aeroexec.vehicles.world import World, parse_world
 from aeroexec.viz.layout import Layout
 
 WORLD_ATTACHMENT = "world.yaml"
 
-#: Trajectory color per recording (base, new): blue, orange.
-TRAJECTORY_COLORS = ((66, 133, 244), (244, 140, 40))
-MARKER_COLOR = (40, 170, 90)
-OBJECT_COLOR = (200, 60, 200)
-BODY_HALF_SIZE = (0.25, 0.25, 0.06)
-MARKER_HALF_SIZE = (0.1, 0.1, 0.1)
+#: Trajectory color per recording (base, new): blue (the Foxglove scene's too), orange.
+TRAJECTORY_COLORS = (VEHICLE_COLOR, (244, 140, 40))
 
 
 def trajectory_color(index: int) -> tuple[int, int, int]:
@@ -77,13 +79,16 @@ def log_vehicle_body(
 def log_series_style(
     stream: rr.RecordingStream, entity: str, name: str, color: tuple[int, int, int] | None = None
 ) -> None:
-    """A step line named `name`: the value holds until the next row."""
+    """A step line named `name`: the value holds until the next row. Zoomed out, where
+    several rows share a pixel, the plot draws their least and greatest value (a
+    vertical stroke), never their average: a level the series never had."""
     stream.log(
         entity,
         rr.SeriesLines(
             names=[name],
             colors=[color] if color else None,
             interpolation_mode="StepAfter",
+            aggregation_policy="MinMax",
         ),
         static=True,
     )

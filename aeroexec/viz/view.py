@@ -2,9 +2,12 @@
 
     report = write_view(["flight.mcap"], "flight.rrd")
     report = write_view(["base.mcap", "replay.mcap"], "diff.rrd")   # under /base and /new
+    report = write_view(["flight.bag"], "flight.rrd")    # a ROS 1 bag, imported on the way
 
 Each input is checked first (readable MCAP, aeroexec profile, at least one message), so
-nothing is written for a bad input. The output holds one Rerun recording, application
+nothing is written for a bad input. A ROS 1 bag is imported (aeroexec.bags, the shipped
+Aerostack mapping) into a temporary recording, removed afterwards; the view names the
+bag. The output holds one Rerun recording, application
 `aeroexec`, whose recording id is derived from the inputs' contents (the same inputs give
 the same id), with the blueprint of blueprint.py as its default layout. Only a recording
 stream created here is used, never Rerun's global one.
@@ -15,8 +18,8 @@ from __future__ import annotations
 import hashlib
 import os
 import uuid
-from collections.abc import Callable, Sequence
-from contextlib import AbstractContextManager, nullcontext
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import AbstractContextManager, ExitStack, contextmanager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -68,10 +71,45 @@ def default_output(recording: str | os.PathLike[str]) -> Path:
     return Path(recording).with_suffix(RRD_SUFFIX)
 
 
-def open_session(path: str | os.PathLike[str]) -> Recording:
-    """Open an aeroexec recording to view; `RecordingError` (one line) for anything else."""
+@dataclass(frozen=True, slots=True)
+class _Source:
+    """An input as shown (`name`: what the user gave) and the recording read for it."""
+
+    name: str
+    recording: Recording
+    notes: tuple[str, ...] = ()
+    #: An imported bag: its raw ROS 1 channels are not decoded, by design (no note).
+    raw_kept: bool = False
+
+
+@contextmanager
+def _opened(path: Path) -> Iterator[_Source]:
+    """The recording of `path`: itself, or for a ROS 1 bag a temporary import of it."""
+    from aeroexec.bags.bagfile import is_bag
+
+    if not is_bag(path):
+        yield _Source(str(path), open_session(path))
+        return
+    from aeroexec.bags.replay import bag_recording
+
+    with bag_recording(path) as imported:
+        if not imported.report.derived:
+            raise RecordingError(
+                "nothing to show: the bag has none of the topics the Aerostack mapping knows "
+                "(poses, behavior and resource topics); `aeroexec import --mapping` then view "
+                "the .mcap",
+                Mark(str(path)),
+            )
+        notes = tuple(f"imported from the bag: {note}" for note in imported.report.notes)
+        recording = open_session(imported.path, shown_as=str(path))
+        yield _Source(str(path), recording, notes, raw_kept=True)
+
+
+def open_session(path: str | os.PathLike[str], *, shown_as: str | None = None) -> Recording:
+    """Open an aeroexec recording to view; `RecordingError` (one line) for anything else
+    (naming `shown_as` when given: the bag a temporary recording came from)."""
     recording = open_recording(path)
-    where = Mark(str(path))
+    where = Mark(shown_as or str(path))
     if recording.profile != PROFILE:
         profile = recording.profile or "none"
         raise RecordingError(
@@ -121,12 +159,19 @@ def write_view(
     *,
     progress: ProgressFactory | None = None,
 ) -> ViewReport:
-    """Convert one recording, or two side by side, into the `.rrd` file `output`."""
+    """Convert one recording, or two side by side, into the `.rrd` file `output`; a ROS 1
+    bag is imported into a temporary recording first."""
     inputs = [Path(p) for p in recordings]
-    opened = [open_session(p) for p in inputs]
-    out = Path(output)
+    with ExitStack() as stack:
+        sources = [stack.enter_context(_opened(p)) for p in inputs]
+        return _write(sources, inputs, Path(output), progress or _no_progress)
+
+
+def _write(
+    sources: list[_Source], inputs: list[Path], out: Path, progress: ProgressFactory
+) -> ViewReport:
     _check_output(out, inputs)
-    labels = [Path(r.name).name for r in opened]
+    labels = [Path(source.name).name for source in sources]
     layouts = layouts_for(labels)
     recording_id = recording_id_for(inputs)
 
@@ -140,14 +185,15 @@ def write_view(
     stream.send_recording_name(" vs ".join(labels))
     log_view_coordinates(stream)
     writer = ColumnWriter(stream)
-    sources = []
-    for index, (recording, layout) in enumerate(zip(opened, layouts, strict=True)):
-        stats = _convert(stream, writer, recording, layout, index, progress or _no_progress)
+    reports = []
+    for index, (source, layout) in enumerate(zip(sources, layouts, strict=True)):
+        recording = source.recording
+        stats = _convert(stream, writer, source, layout, index, progress)
         survey = recording.survey()
-        notes = list(stats.notes) + list(recording.notes)
-        sources.append(
+        notes = [*source.notes, *stats.notes, *([] if source.raw_kept else recording.notes)]
+        reports.append(
             SourceReport(
-                file=recording.name,
+                file=source.name,
                 root=layout.origin,
                 complete=survey.end.complete,
                 problem=survey.end.problem,
@@ -158,37 +204,31 @@ def write_view(
         )
     stream.flush()
     stream.disconnect()
-    return ViewReport(out, recording_id, tuple(sources))
+    return ViewReport(out, recording_id, tuple(reports))
 
 
 def _convert(
     stream: rr.RecordingStream,
     writer: ColumnWriter,
-    recording: Recording,
+    source: _Source,
     layout: Layout,
     index: int,
     progress: ProgressFactory,
 ) -> ConvertStats:
+    recording = source.recording
     color = trajectory_color(index)
     # The session's metadata (seed, catalog, world, ...) as a recording property.
-    facts = {"file": Path(recording.name).name, **recording.metadata.get("aeroexec", {})}
+    facts = {"file": Path(source.name).name, **recording.metadata.get("aeroexec", {})}
     stream.send_property(layout.root or "session", rr.AnyValues(**facts))
     world, world_note = recorded_world(recording)
     if world is not None:
         log_world(stream, layout, world)
     log_vehicle_body(stream, layout, color)
     survey = recording.survey()
-    has_pose = any(c.topic.endswith("/vehicle/pose") for c in survey.channels.values())
     converter = SessionConverter(
-        stream,
-        writer,
-        layout,
-        origin_ns=session_origin_ns(recording),
-        world=world,
-        color=color,
-        pose_from_state=not has_pose,
+        stream, writer, layout, origin_ns=session_origin_ns(recording), world=world, color=color
     )
-    with progress(recording.name, survey.message_count) as advance:
+    with progress(source.name, survey.message_count) as advance:
         count = 0
         for record in recording.records():
             converter.feed(record)

@@ -1,0 +1,87 @@
+"""`aeroexec layout --foxglove -o FILE`: the Foxglove/Lichtblick layout for recordings."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from aeroexec.cli.app import app, guarded
+from aeroexec.errors import AeroexecError, Mark, RecordingError
+from aeroexec.viz.foxglove_layout import layout_text
+
+
+def _write_whole(path: Path, text: str) -> None:
+    """Write `text` to `path` whole or not at all (a temporary name, then a rename)."""
+    where = Mark(str(path))
+    if path.is_dir():
+        raise RecordingError("is a directory; give a file name ending in .json", where)
+    folder = path.parent if str(path.parent) else Path(".")
+    try:
+        descriptor, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
+    except OSError as exc:
+        raise RecordingError(f"cannot write: {exc.strerror or exc}", where) from None
+    try:
+        with os.fdopen(descriptor, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.chmod(temporary, 0o644)
+        os.replace(temporary, path)
+    except OSError as exc:
+        Path(temporary).unlink(missing_ok=True)
+        raise RecordingError(f"cannot write: {exc.strerror or exc}", where) from None
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+@app.command("layout")
+@guarded
+def layout(
+    foxglove: Annotated[
+        bool,
+        typer.Option(
+            "--foxglove", help="A layout for Foxglove (and Lichtblick, its open-source fork)."
+        ),
+    ] = False,
+    output: Annotated[
+        Path | None,
+        typer.Option(
+            "--output",
+            "-o",
+            metavar="FILE",
+            help="Write the layout here (default: standard output).",
+            show_default=False,
+        ),
+    ] = None,
+    drone: Annotated[
+        str,
+        typer.Option("--drone", metavar="NAME", help="The drone's namespace in the recordings."),
+    ] = "drone1",
+) -> None:
+    """Write a viewer layout for aeroexec recordings, to import once: the flight in 3D
+    (the world's markers and object, the vehicle on its frame), the plot of position and
+    battery, the behavior events, the call log and the session's log.
+
+    In Foxglove or Lichtblick: open a recording, then Layouts > Import layout from file
+    (Lichtblick: the app menu's "Import layout from file...") and pick the file.
+
+    \b
+    Examples:
+      aeroexec layout --foxglove -o aeroexec-layout.json
+      aeroexec layout --foxglove --drone drone2 > drone2.json
+
+    Exit codes: 0 written; 2 no viewer chosen or the file cannot be written.
+    """
+    if not foxglove:
+        raise AeroexecError("choose the viewer the layout is for: --foxglove")
+    if not drone.strip("/") or "/" in drone.strip("/"):
+        raise AeroexecError(f"--drone: a namespace is one name, got '{drone}'")
+    text = layout_text(drone.strip("/"))
+    if output is None:
+        typer.echo(text, nl=False)
+        return
+    _write_whole(output, text)
+    typer.echo(f"wrote {output}", err=True)

@@ -1,0 +1,289 @@
+"""Messages for Foxglove's and Lichtblick's own panels, derived from what the executive
+records: the 3D panel's frame tree and scene, and a call log for the Log panel.
+
+* `vehicle/transform` (`foxglove.FrameTransform`): `world` -> `<drone>/base_link`, one per
+  `vehicle/state`: the vehicle's position and yaw as the 3D panel's frame tree.
+* `scene` (`foxglove.SceneUpdate`): once, with the first vehicle state: the vehicle's body
+  (a box with a heading arrow, locked to its frame, so it flies with the transforms), and,
+  when the session has a world, its visual markers and the object to follow. A moving
+  object is sent again (its entity only) each time it has moved `OBJECT_STEP_M`.
+* `call_log` (`foxglove.Log`): one line per service call made at the top (by the mission,
+  the executive or a behavior; the calls nested inside it are in their own channels).
+
+Every message is complete (all the fields Foxglove's schema requires, primitive lists
+empty when unused) and a pure function of its inputs, so recordings stay byte-identical.
+Distances in metres, in the world's local ENU frame (x east, y north, z up).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from aeroexec.vehicles.world import World
+
+#: The frame the vehicle's position is expressed in (local ENU, the simulator's world).
+WORLD_FRAME = "world"
+#: A moving object's entity is sent again each time the object has moved this far (m):
+#: half its size, a step the eye follows, at a cost that grows with its speed only.
+OBJECT_STEP_M = 0.2
+
+#: Colors (RGB, 0..255), shared with the Rerun view (aeroexec/viz/scene.py).
+VEHICLE_COLOR = (66, 133, 244)
+MARKER_COLOR = (40, 170, 90)
+OBJECT_COLOR = (200, 60, 200)
+#: Half sizes (m) of the vehicle's body box and of a marker's box.
+BODY_HALF_SIZE = (0.25, 0.25, 0.06)
+MARKER_HALF_SIZE = (0.1, 0.1, 0.1)
+OBJECT_RADIUS = 0.2
+
+LOG_INFO = 2
+LOG_WARNING = 3
+_NS = 1_000_000_000
+_IDENTITY = {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+_FOREVER = {"sec": 0, "nsec": 0}
+
+
+def vehicle_frame(drone: str) -> str:
+    """The frame of the vehicle's body (ROS's `base_link`, under the drone's namespace)."""
+    return f"{drone}/base_link"
+
+
+def stamp(log_time_ns: int) -> dict[str, int]:
+    sec, nsec = divmod(max(log_time_ns, 0), _NS)
+    return {"sec": sec, "nsec": nsec}
+
+
+# -- the frame tree --------------------------------------------------------------------------
+def transform(
+    x: float, y: float, z: float, yaw: float, log_time_ns: int, child_frame: str
+) -> dict[str, Any] | None:
+    """A `foxglove.FrameTransform` world -> `child_frame` (None if a value is not finite)."""
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(yaw)):
+        return None
+    return {
+        "timestamp": stamp(log_time_ns),
+        "parent_frame_id": WORLD_FRAME,
+        "child_frame_id": child_frame,
+        "translation": {"x": x, "y": y, "z": z},
+        "rotation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
+    }
+
+
+def state_transform(
+    state: Mapping[str, Any], log_time_ns: int, child_frame: str
+) -> dict[str, Any] | None:
+    """The transform of a `vehicle/state` payload (None if it has no usable pose)."""
+    try:
+        px, py, pz = state["position"]
+        return transform(
+            float(px), float(py), float(pz), float(state.get("yaw", 0.0)), log_time_ns, child_frame
+        )
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+# -- the scene -------------------------------------------------------------------------------
+def _color(rgb: tuple[int, int, int], alpha: float = 1.0) -> dict[str, float]:
+    r, g, b = rgb
+    return {"r": r / 255, "g": g / 255, "b": b / 255, "a": alpha}
+
+
+def _pose(x: float, y: float, z: float) -> dict[str, Any]:
+    return {"position": {"x": x, "y": y, "z": z}, "orientation": dict(_IDENTITY)}
+
+
+def _size(half: tuple[float, float, float]) -> dict[str, float]:
+    return {"x": 2 * half[0], "y": 2 * half[1], "z": 2 * half[2]}
+
+
+def _text(text: str, x: float, y: float, z: float) -> dict[str, Any]:
+    return {
+        "pose": _pose(x, y, z),
+        "billboard": True,
+        "font_size": 14.0,
+        "scale_invariant": True,
+        "color": _color((255, 255, 255)),
+        "text": text,
+    }
+
+
+def _entity(
+    log_time_ns: int,
+    frame: str,
+    entity_id: str,
+    *,
+    locked: bool = False,
+    metadata: dict[str, str] | None = None,
+    arrows: list[dict[str, Any]] | None = None,
+    cubes: list[dict[str, Any]] | None = None,
+    spheres: list[dict[str, Any]] | None = None,
+    texts: list[dict[str, Any]] | None = None,
+) -> dict[str, Any]:
+    return {
+        "timestamp": stamp(log_time_ns),
+        "frame_id": frame,
+        "id": entity_id,
+        "lifetime": dict(_FOREVER),
+        "frame_locked": locked,
+        "metadata": [{"key": k, "value": v} for k, v in (metadata or {}).items()],
+        "arrows": arrows or [],
+        "cubes": cubes or [],
+        "spheres": spheres or [],
+        "cylinders": [],
+        "lines": [],
+        "triangles": [],
+        "texts": texts or [],
+        "models": [],
+    }
+
+
+def vehicle_entity(log_time_ns: int, drone: str) -> dict[str, Any]:
+    """The vehicle's body in its own frame: it moves with the frame's transforms."""
+    heading = {
+        "pose": _pose(0.0, 0.0, 0.0),
+        "shaft_length": 0.45,
+        "shaft_diameter": 0.04,
+        "head_length": 0.15,
+        "head_diameter": 0.1,
+        "color": _color((255, 200, 0)),
+    }
+    body = {
+        "pose": _pose(0.0, 0.0, 0.0),
+        "size": _size(BODY_HALF_SIZE),
+        "color": _color(VEHICLE_COLOR),
+    }
+    return _entity(
+        log_time_ns,
+        vehicle_frame(drone),
+        "vehicle",
+        locked=True,
+        metadata={"drone": drone},
+        arrows=[heading],
+        cubes=[body],
+        texts=[_text(drone, 0.0, 0.0, 0.35)],
+    )
+
+
+def object_entity(log_time_ns: int, position: tuple[float, float, float]) -> dict[str, Any]:
+    x, y, z = position
+    sphere = {
+        "pose": _pose(x, y, z + OBJECT_RADIUS),
+        "size": {"x": 2 * OBJECT_RADIUS, "y": 2 * OBJECT_RADIUS, "z": 2 * OBJECT_RADIUS},
+        "color": _color(OBJECT_COLOR),
+    }
+    return _entity(
+        log_time_ns,
+        WORLD_FRAME,
+        "object",
+        metadata={"kind": "object to follow"},
+        spheres=[sphere],
+        texts=[_text("object", x, y, z + 2 * OBJECT_RADIUS + 0.2)],
+    )
+
+
+def world_entities(log_time_ns: int, world: World) -> list[dict[str, Any]]:
+    """The world's visual markers (one entity each) and the object to follow."""
+    entities = []
+    for marker in world.markers:
+        x, y, z = marker.position
+        box = {
+            "pose": _pose(x, y, z),
+            "size": _size(MARKER_HALF_SIZE),
+            "color": _color(MARKER_COLOR),
+        }
+        entities.append(
+            _entity(
+                log_time_ns,
+                WORLD_FRAME,
+                f"marker/{marker.id}",
+                metadata={"kind": "visual marker", "marker_id": str(marker.id)},
+                cubes=[box],
+                texts=[_text(f"marker {marker.id}", x, y, z + 2 * MARKER_HALF_SIZE[2] + 0.15)],
+            )
+        )
+    if world.object is not None:
+        entities.append(object_entity(log_time_ns, world.object.at(log_time_ns / _NS)))
+    return entities
+
+
+def scene_update(entities: list[dict[str, Any]]) -> dict[str, Any]:
+    return {"deletions": [], "entities": entities}
+
+
+def first_scene(log_time_ns: int, drone: str, world: World | None) -> dict[str, Any]:
+    """The scene sent with the first vehicle state: the vehicle, and the world if any."""
+    entities = [vehicle_entity(log_time_ns, drone)]
+    if world is not None:
+        entities += world_entities(log_time_ns, world)
+    return scene_update(entities)
+
+
+def object_period_ns(world: World | None) -> int | None:
+    """How often the object's entity is sent again: the time it takes to move
+    OBJECT_STEP_M (None when there is no object or it stands still)."""
+    if world is None or world.object is None:
+        return None
+    speed = math.hypot(*world.object.velocity)
+    if speed <= 0 or not math.isfinite(speed):
+        return None
+    return max(1, round(OBJECT_STEP_M / speed * _NS))
+
+
+# -- the call log ----------------------------------------------------------------------------
+def _value(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool) or value is None:
+        return str(value).lower() if value is not None else "null"
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k}={_value(v)}" for k, v in value.items()) + "}"
+    return str(value)
+
+
+def _fields(values: Mapping[str, Any]) -> str:
+    """`behavior` first and bare, `arguments` spread out, the rest as key=value."""
+    parts: list[str] = []
+    behavior = values.get("behavior")
+    if isinstance(behavior, str):
+        parts.append(behavior)
+    for key, value in values.items():
+        if key == "behavior" and isinstance(value, str):
+            continue
+        if key == "arguments" and isinstance(value, Mapping):
+            parts += [f"{k}={_value(v)}" for k, v in value.items()]
+            continue
+        if value in ([], {}, "", None):
+            continue
+        parts.append(f"{key}={_value(value)}")
+    return " ".join(parts)
+
+
+def call_log_message(call: Mapping[str, Any], log_time_ns: int) -> dict[str, Any]:
+    """A top-level service call as one `foxglove.Log` line: `service request -> answer`."""
+    request = call.get("request")
+    response = call.get("response")
+    request = request if isinstance(request, Mapping) else {}
+    response = response if isinstance(response, Mapping) else {}
+    ok = bool(response.get("ok"))
+    asked = _fields(request)
+    head = f"{call.get('service', '')} {asked}".rstrip()
+    if ok:
+        extra = _fields({k: v for k, v in response.items() if k not in ("ok", "error")})
+        answer = f"ok {extra}".rstrip()
+    else:
+        answer = f"refused: {response.get('error', '')}"
+    return {
+        "timestamp": stamp(log_time_ns),
+        "level": LOG_INFO if ok else LOG_WARNING,
+        "message": f"{head} -> {answer}",
+        "name": str(call.get("caller", "")),
+        "file": "",
+        "line": 0,
+    }
