@@ -22,6 +22,7 @@ from rosbags.rosbag1.reader import decompressors
 
 from aeroexec.bags.types import ros1_name
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.inputs import is_regular_file, regular_file
 
 MAGIC = b"#ROSBAG V2.0\n"
 _MAGIC_PREFIX = b"#ROSBAG V"
@@ -36,6 +37,8 @@ def is_bag(path: str | os.PathLike[str]) -> bool:
     file = Path(path)
     if file.suffix.lower() == ".bag":
         return True
+    if not is_regular_file(file):  # opening a FIFO to look would block
+        return False
     try:
         with open(file, "rb") as stream:
             return stream.read(len(_MAGIC_PREFIX)) == _MAGIC_PREFIX
@@ -97,13 +100,9 @@ def _read_header(stream: object, name: str) -> _Header:
 
 
 def _precheck(file: Path, name: str) -> _Header:
-    if file.is_dir():
-        raise RecordingError("is a directory, not a ROS 1 bag file", Mark(name))
+    size = regular_file(file, "a ROS 1 bag file", RecordingError)
     try:
-        size = file.stat().st_size
         stream = open(file, "rb")  # noqa: SIM115 (closed below)
-    except FileNotFoundError:
-        raise RecordingError("no such file", Mark(name)) from None
     except OSError as exc:
         raise RecordingError(f"cannot read: {exc.strerror or exc}", Mark(name)) from None
     with stream:

@@ -15,6 +15,7 @@ from types import CodeType
 from typing import Any
 
 from aeroexec.errors import Mark, MissionError
+from aeroexec.inputs import read_text
 from aeroexec.mission.api import MODULE_NAME, MissionAPI
 
 ENTRY_POINTS = ("runMission", "run_mission", "main")
@@ -40,17 +41,7 @@ class MissionOutcome:
 def load_mission(path: str | Path) -> MissionScript:
     """Read and compile a mission script; `MissionError` with file:line:col if it can't."""
     file = str(path)
-    p = Path(path)
-    if not p.exists():
-        raise MissionError("no such file", Mark(file))
-    if p.is_dir():
-        raise MissionError("is a directory, not a mission script", Mark(file))
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise MissionError(f"not UTF-8 text (byte {exc.start})", Mark(file)) from None
-    except OSError as exc:
-        raise MissionError(f"cannot read: {exc.strerror}", Mark(file)) from None
+    text = read_text(path, "a mission script", MissionError)
     return compile_mission(text, file)
 
 

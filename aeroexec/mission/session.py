@@ -19,6 +19,7 @@ from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
+from aeroexec.inputs import read_text
 from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
@@ -51,14 +52,11 @@ class SessionResult:
 
 def _world_text(world_path: str | Path | None) -> tuple[str, str]:
     """The world file's text and the name to show: recorded so replay can rebuild it."""
-    from aeroexec.errors import Mark, WorldError
+    from aeroexec.errors import WorldError
     from aeroexec.vehicles.world import DEFAULT_WORLD
 
     path = Path(world_path) if world_path is not None else DEFAULT_WORLD
-    try:
-        return path.read_text(encoding="utf-8"), str(path)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise WorldError(f"cannot read world file: {exc}", Mark(str(path))) from None
+    return read_text(path, "a world file", WorldError), str(path)
 
 
 def _build_vehicle(world_text: str, world_file: str, seed: int) -> SimVehicle:

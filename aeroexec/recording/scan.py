@@ -44,6 +44,7 @@ from mcap.records import (
 from mcap.stream_reader import breakup_chunk
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.inputs import regular_file
 
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 _PREFIX = struct.Struct("<BQ")
@@ -86,19 +87,9 @@ class ScanEnd:
 
 def check_readable(path: str | os.PathLike[str]) -> Path:
     """The path if it names a non-empty regular file, else a `RecordingError`."""
-    where = Mark(str(path))
-    p = Path(path)
-    try:
-        if p.is_dir():
-            raise RecordingError("is a directory, not a recording", where)
-        size = p.stat().st_size
-    except FileNotFoundError:
-        raise RecordingError("no such file", where) from None
-    except OSError as exc:
-        raise RecordingError(f"cannot read: {exc.strerror or exc}", where) from None
-    if size == 0:
-        raise RecordingError("empty file, not an MCAP recording", where)
-    return p
+    if regular_file(path, "a recording", RecordingError) == 0:
+        raise RecordingError("empty file, not an MCAP recording", Mark(str(path)))
+    return Path(path)
 
 
 class RecordScanner:
