@@ -68,3 +68,17 @@ class RecordingError(AeroexecError):
 
 class WorldError(AeroexecError):
     """A simulator world file is malformed."""
+
+
+class OutputLost(BaseException):
+    """An output file could not be written (a full disk, a file size limit): the command
+    must stop, and `error` says what was kept or removed.
+
+    A `BaseException`, like `KeyboardInterrupt`: the writer fails inside the session (the
+    recorder is a bus observer), and no mission's or behavior's `except Exception:` may
+    swallow it and fly on unrecorded.
+    """
+
+    def __init__(self, error: AeroexecError) -> None:
+        super().__init__(str(error))
+        self.error = error

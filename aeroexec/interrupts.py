@@ -27,6 +27,8 @@ from types import FrameType
 HANDLED: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 _pending: int | None = None
+#: How many `signals_as_interrupts` blocks are active (they may nest).
+_handling = 0
 
 
 class Interrupted(BaseException):
@@ -54,6 +56,12 @@ def pending() -> int | None:
     return _pending
 
 
+def handling() -> bool:
+    """Are signals being turned into `Interrupted` here? Then a `KeyboardInterrupt` can
+    only have been raised by code (a mission's own `raise KeyboardInterrupt`)."""
+    return _handling > 0
+
+
 def check() -> None:
     """Raise `Interrupted` if a handled signal arrived since the last check."""
     global _pending
@@ -78,16 +86,19 @@ def signals_as_interrupts(signums: tuple[signal.Signals, ...] = HANDLED) -> Iter
     Only the main thread can install handlers; elsewhere (a worker thread, an embedding
     application) the block leaves the handlers as they are.
     """
-    global _pending
+    global _pending, _handling
     previous: dict[int, object] = {}
     try:
         for signum in signums:
             previous[signum] = signal.signal(signum, _note)
     except ValueError:  # not the main thread
         pass
+    installed = signal.SIGINT in previous
+    _handling += installed
     try:
         yield
     finally:
+        _handling -= installed
         for signum, handler in previous.items():
             signal.signal(signum, handler)  # type: ignore[arg-type]
         _pending = None

@@ -7,6 +7,9 @@ from collections.abc import Mapping
 from typing import Any
 
 from aeroexec.behaviors._support import (
+    LINK_FAULTS,
+    MOTOR_FAULTS,
+    POWER_FAULTS,
     PROGRESS_WINDOW,
     STOPPED_SPEED,
     MotionBehavior,
@@ -26,6 +29,7 @@ class KeepHovering(MotionBehavior):
 
     name = "KEEP_HOVERING"
     default_duration = 5.0
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)
@@ -50,6 +54,7 @@ class StartHovering(MotionBehavior):
     """Brake and hold position; succeeds once the vehicle has (nearly) stopped."""
 
     name = "START_HOVERING"
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)

@@ -17,9 +17,10 @@ from aeroexec.catalog.loader import load_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import SimClock
+from aeroexec.executive.clock import NS_PER_S, SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.inputs import read_text
+from aeroexec.interrupts import Interrupted
 from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
@@ -30,6 +31,10 @@ if TYPE_CHECKING:
     from aeroexec.recording import Recorder
 
 
+#: A mission that never ends is stopped after one simulated day.
+DEFAULT_MAX_SIM_TIME_S = 24 * 3600.0
+
+
 @dataclass(frozen=True)
 class SessionConfig:
     mission: str | Path
@@ -38,6 +43,8 @@ class SessionConfig:
     world: str | Path | None = None
     record: str | Path | None = None
     drone: str = "drone1"
+    #: The session ends when the simulated clock reaches this (None: never).
+    max_sim_time_s: float | None = DEFAULT_MAX_SIM_TIME_S
 
 
 @dataclass(frozen=True)
@@ -48,6 +55,13 @@ class SessionResult:
     final_state: VehicleState
     recording: str | None = None
     metadata: dict[str, str] = field(default_factory=dict)
+    #: (clock ns, fault) each time the vehicle's fault changed ('' when it cleared).
+    faults: tuple[tuple[int, str], ...] = ()
+
+    @property
+    def vehicle_lost(self) -> str:
+        """The fault the vehicle ended the session with ('' when it ended healthy)."""
+        return self.final_state.fault
 
 
 def _world_text(world_path: str | Path | None) -> tuple[str, str]:
@@ -125,9 +139,18 @@ def simulate(
         executive = Executive(
             catalog, vehicle=vehicle, clock=SimClock(), observers=all_observers, drone=config.drone
         )
+        if config.max_sim_time_s is not None:
+            executive.time_limit_ns = round(config.max_sim_time_s * NS_PER_S)
         outcome = run_script(script, MissionAPI(executive))
-    finally:
         if recorder is not None:
+            end_recording(recorder, outcome.ending.value, outcome.error, vehicle.state().fault)
+    except Interrupted as stop:
+        if recorder is not None and not recorder.closed:
+            end_recording(recorder, "interrupted", stop.name, vehicle.state().fault)
+            stop.notes.append(finalized_note(recorder))
+        raise
+    finally:
+        if recorder is not None and not recorder.closed:
             recorder.close()
     return SessionResult(
         outcome=outcome,
@@ -136,4 +159,17 @@ def simulate(
         final_state=vehicle.state(),
         recording=str(config.record) if config.record is not None else None,
         metadata=metadata,
+        faults=tuple(activity.faults),
     )
+
+
+def finalized_note(recorder: Recorder) -> str:
+    """What an interrupted command says about its recording."""
+    return f"recording finalized: {recorder.path} ({recorder.messages_written} messages, complete)"
+
+
+def end_recording(recorder: Recorder, reason: str, detail: str, fault: str) -> None:
+    """Write why the session ended (`aeroexec_end`), then the footer."""
+    facts = {"vehicle_fault": fault} if fault else {}
+    recorder.end_session(reason, detail, **facts)
+    recorder.close()
