@@ -185,7 +185,8 @@ def test_run_exit_1_when_the_mission_raises(tmp_path: Path) -> None:
     )
     assert result.returncode == 1
     # The mission's own line, without --debug.
-    assert result.stderr.strip() == f"{path}:5: mission failed: RuntimeError: battery sensor disagrees"
+    expected = f"{path}:5: mission failed: RuntimeError: battery sensor disagrees"
+    assert result.stderr.strip() == expected
     assert "Traceback" not in result.stdout + result.stderr
     debug = runner.invoke(app, ["run", str(path), "--debug"])
     assert debug.exit_code == 1
