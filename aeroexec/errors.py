@@ -48,6 +48,10 @@ class AeroexecError(Exception):
         self.message = message
         self.mark = mark
 
+    def __reduce__(self) -> tuple[object, ...]:
+        # Crosses process boundaries (replay --jobs) with its mark.
+        return (type(self), (self.message, self.mark))
+
     def __str__(self) -> str:
         if self.mark is None:
             return one_line(self.message)
@@ -82,3 +86,6 @@ class OutputLost(BaseException):
     def __init__(self, error: AeroexecError) -> None:
         super().__init__(str(error))
         self.error = error
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (type(self), (self.error,))

@@ -41,6 +41,10 @@ class Interrupted(BaseException):
         self.notes: list[str] = []
         super().__init__(f"interrupted by {self.name}")
 
+    def __reduce__(self) -> tuple[object, ...]:
+        # Raised in a worker process (replay --jobs), re-raised in the parent.
+        return (_rebuild, (self.signum, tuple(self.notes)))
+
     def line(self) -> str:
         """The one line the command line prints."""
         return "; ".join([f"interrupted by {self.name}", *self.notes])
@@ -49,6 +53,12 @@ class Interrupted(BaseException):
     def exit_code(self) -> int:
         """The shell's convention for a process ended by a signal."""
         return 128 + self.signum
+
+
+def _rebuild(signum: int, notes: tuple[str, ...]) -> Interrupted:
+    stop = Interrupted(signum)
+    stop.notes.extend(notes)
+    return stop
 
 
 def pending() -> int | None:
@@ -77,6 +87,23 @@ def _note(signum: int, frame: FrameType | None) -> None:
         _pending = None
         raise Interrupted(signum)
     _pending = signum
+
+
+def _note_only(signum: int, frame: FrameType | None) -> None:
+    global _pending
+    _pending = signum
+
+
+def in_worker_process(signums: tuple[signal.Signals, ...] = HANDLED) -> None:
+    """For a worker process of a command (replay --jobs): signals are noted for `check()`
+    and never raise at once. A Ctrl-C reaches the parent and its workers alike, and the
+    parent passes a signal it got alone on to them, so a worker may see the same signal
+    twice: that must not count as the "second signal" escape hatch, which could stop it
+    in the middle of writing a record. (The parent keeps the escape hatch.)"""
+    global _handling
+    for signum in signums:
+        signal.signal(signum, _note_only)
+    _handling = 1
 
 
 @contextmanager

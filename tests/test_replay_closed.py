@@ -42,6 +42,9 @@ def recs(work: Path) -> dict[str, Path]:
 
 
 def replay(path: Path, catalog: Path | None = None, **options: Any) -> ReplayResult:
+    """Replay one of this module's own recordings, running its stored script (these
+    tests are about script replays; the untrusted default is tested below)."""
+    options.setdefault("trust_recording", True)
     return replay_recording(
         path, ReplayOptions(catalog=str(catalog) if catalog else None, **options)
     )

@@ -23,6 +23,7 @@ from rosbags.rosbag1.reader import decompressors
 from aeroexec.bags.types import ros1_name
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.inputs import is_regular_file, regular_file
+from aeroexec.interrupts import check as check_interrupts
 
 MAGIC = b"#ROSBAG V2.0\n"
 _MAGIC_PREFIX = b"#ROSBAG V"
@@ -193,6 +194,7 @@ class BagFile:
         last = self.start_ns
         try:
             for connection, time_ns, data in self._reader.messages():
+                check_interrupts()
                 count += 1
                 last = time_ns
                 yield by_id[connection.id], time_ns, data

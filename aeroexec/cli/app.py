@@ -16,6 +16,7 @@ import typer
 from aeroexec import __version__
 from aeroexec.errors import AeroexecError, OutputLost
 from aeroexec.interrupts import Interrupted, signals_as_interrupts
+from aeroexec.interrupts import check as check_interrupts
 
 app = typer.Typer(
     name="aeroexec",
@@ -65,7 +66,11 @@ def guarded(func: F) -> F:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             with signals_as_interrupts():
-                return func(*args, **kwargs)
+                result = func(*args, **kwargs)
+                # A signal that came after the last safe point still stops with 128+N
+                # (the command's outputs are complete by now).
+                check_interrupts()
+                return result
         except Interrupted as exc:
             error_line(f"aeroexec: {exc.line()}")
             raise typer.Exit(exc.exit_code) from None

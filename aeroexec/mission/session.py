@@ -7,7 +7,8 @@ checkable.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,7 +25,7 @@ from aeroexec.interrupts import Interrupted
 from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
-from aeroexec.vehicles.base import VehicleState
+from aeroexec.vehicles.base import Vehicle, VehicleState
 from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
@@ -135,7 +136,7 @@ def simulate(
     activity, all_observers, recorder = session_observers(
         config.record, config.drone, metadata, attachments, observers
     )
-    try:
+    with recording_session(recorder, vehicle):
         executive = Executive(
             catalog, vehicle=vehicle, clock=SimClock(), observers=all_observers, drone=config.drone
         )
@@ -144,14 +145,6 @@ def simulate(
         outcome = run_script(script, MissionAPI(executive))
         if recorder is not None:
             end_recording(recorder, outcome.ending.value, outcome.error, vehicle.state().fault)
-    except Interrupted as stop:
-        if recorder is not None and not recorder.closed:
-            end_recording(recorder, "interrupted", stop.name, vehicle.state().fault)
-            stop.notes.append(finalized_note(recorder))
-        raise
-    finally:
-        if recorder is not None and not recorder.closed:
-            recorder.close()
     return SessionResult(
         outcome=outcome,
         activations=tuple(activity.rows),
@@ -161,6 +154,24 @@ def simulate(
         metadata=metadata,
         faults=tuple(activity.faults),
     )
+
+
+@contextmanager
+def recording_session(recorder: Recorder | None, vehicle: Vehicle | None = None) -> Iterator[None]:
+    """The block a recorded session runs in: on a signal the recording gets its end
+    record ("interrupted") and its footer, and the `Interrupted` says so; however the
+    block ends, the recorder is closed."""
+    try:
+        yield
+    except Interrupted as stop:
+        if recorder is not None and not recorder.closed:
+            fault = vehicle.state().fault if vehicle is not None else ""
+            end_recording(recorder, "interrupted", stop.name, fault)
+            stop.notes.append(finalized_note(recorder))
+        raise
+    finally:
+        if recorder is not None and not recorder.closed:
+            recorder.close()
 
 
 def finalized_note(recorder: Recorder) -> str:

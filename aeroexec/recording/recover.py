@@ -6,9 +6,9 @@ Reads the source record by record (`RecordScanner`: no footer or summary needed)
 writes every schema, channel, message, attachment and metadata record it can read, in
 the same order, to a new file with a proper summary and footer. The output is written
 to a temporary name beside the target and renamed into place only when complete, so a
-failed recovery never leaves a half-written target. Channel and schema ids are renumbered
-in order of appearance (identical to the source's for aeroexec files). Memory stays flat:
-one chunk at a time.
+failed or interrupted recovery never leaves a half-written target. Channel and schema ids
+are renumbered in order of appearance (identical to the source's for aeroexec files).
+Memory stays flat: one chunk at a time.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from mcap.records import Metadata
 from mcap.writer import CompressionType, Writer
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.outputs import whole_file_or_none
 from aeroexec.recording.reader import (
     ChannelInfo,
     RawMessage,
@@ -62,13 +63,8 @@ def recover(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> R
         raise RecordingError("the output must be a different file", Mark(str(target)))
     if target_path.is_dir():
         raise RecordingError("is a directory", Mark(str(target)))
-    temp = target_path.with_name(f".{target_path.name}.recovering")
-    try:
-        stream = open(temp, "wb")  # noqa: SIM115 (closed below)
-    except OSError as exc:
-        raise RecordingError(f"cannot write: {exc.strerror or exc}", Mark(str(target))) from None
     counts = {"messages": 0, "channels": 0, "attachments": 0, "metadata": 0}
-    try:
+    with whole_file_or_none(target_path) as temp, open(temp, "wb") as stream:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile=recording.profile, library=recording.library)
         schemas: dict[tuple[str, str, bytes], int] = {}
@@ -99,16 +95,7 @@ def recover(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> R
                 writer.add_metadata(item.name, dict(item.metadata))
                 counts["metadata"] += 1
         writer.finish()
-        stream.close()
-        os.replace(temp, target_path)
-    except OSError as exc:
-        stream.close()
-        temp.unlink(missing_ok=True)
-        raise RecordingError(f"cannot write: {exc.strerror or exc}", Mark(str(target))) from None
-    except BaseException:
-        stream.close()
-        temp.unlink(missing_ok=True)
-        raise
+        stream.flush()  # a full disk is an error here, inside the block
     end = recording.end
     return RecoverReport(
         source=recording.name,

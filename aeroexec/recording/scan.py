@@ -45,6 +45,7 @@ from mcap.stream_reader import breakup_chunk
 
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.inputs import regular_file
+from aeroexec.interrupts import check as check_interrupts
 
 MAGIC = bytes([137, 77, 67, 65, 80, 48, 13, 10])
 _PREFIX = struct.Struct("<BQ")
@@ -152,6 +153,7 @@ class RecordScanner:
         offset = self._data_start
         size = self.size
         while True:
+            check_interrupts()  # between records: a safe point for every reader
             prefix = stream.read(_PREFIX.size)
             if not prefix:
                 self._stop(offset, f"no footer: the file ends at byte {offset} (incomplete)")

@@ -14,20 +14,23 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
 from typing import Any
 
+from aeroexec import interrupts
 from aeroexec.bags.bagfile import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.mission.script import load_mission
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S
+from aeroexec.replay.workers import completed_or_interrupted
 
 
 class Mode(str, Enum):
@@ -44,6 +47,11 @@ class ReplayOptions:
     #: Write the replay to this MCAP file.
     output: str | None = None
     tolerance: Tolerance = field(default_factory=Tolerance)
+    #: Closed loop: run this mission script (the user's copy of the recorded one).
+    mission: str | None = None
+    #: Closed loop without `mission`: run the script stored in the recording (code from
+    #: a file the user may have received from anyone: never by default).
+    trust_recording: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -124,7 +132,15 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     mode = choose_mode(run, options.mode)
     catalog = choose_catalog(run, options.catalog)
     if mode is Mode.closed:
-        replayed, how = replay_closed(run, catalog, options.output, horizon)
+        mission = load_mission(options.mission) if options.mission is not None else None
+        replayed, how = replay_closed(
+            run,
+            catalog,
+            options.output,
+            horizon,
+            mission=mission,
+            trust_recording=options.trust_recording,
+        )
     else:
         replayed, how = replay_open(path, run, catalog, options.output, horizon)
     notes.extend(how)
@@ -189,10 +205,12 @@ def replay_many(
                 on_done(result)
             results.append(result)
         return results
-    with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
+    with ProcessPoolExecutor(
+        max_workers=min(jobs, len(paths)), initializer=interrupts.in_worker_process
+    ) as pool:
         futures = [pool.submit(replay_file, p, o) for p, o in zip(paths, per_path, strict=True)]
-        if on_done is not None:
-            for future in as_completed(futures):
+        for future in completed_or_interrupted(pool, futures):
+            if on_done is not None:
                 on_done(future.result())
         return [future.result() for future in futures]
 

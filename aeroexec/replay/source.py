@@ -27,6 +27,7 @@ from mcap.records import Attachment, Channel, Chunk, Message, Metadata
 from mcap.stream_reader import breakup_chunk
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.interrupts import check as check_interrupts
 from aeroexec.recording.reader import Recording
 from aeroexec.recording.schemas import MESSAGE_ENCODING
 
@@ -168,6 +169,7 @@ class _Walk:
         offset = _MAGIC_LENGTH
         pending: _Pending | None = None
         while True:
+            check_interrupts()
             prefix = stream.read(_PREFIX.size)
             if len(prefix) < _PREFIX.size:
                 if pending is not None:

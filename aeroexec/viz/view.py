@@ -23,6 +23,7 @@ from pathlib import Path
 import rerun as rr
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.outputs import whole_file_or_none
 from aeroexec.recording.reader import Recording, open_recording
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.viz.blueprint import build_blueprint
@@ -136,29 +137,45 @@ def write_view(
     stream = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id, send_properties=False)
     stream.set_log_time_enabled(False)  # no wall-clock timeline: same input, same rows
     stream.set_log_tick_enabled(False)
-    stream.save(str(out), default_blueprint=build_blueprint(layouts))
-    stream.send_recording_name(" vs ".join(labels))
-    log_view_coordinates(stream)
-    writer = ColumnWriter(stream)
     sources = []
-    for index, (recording, layout) in enumerate(zip(opened, layouts, strict=True)):
-        stats = _convert(stream, writer, recording, layout, index, progress or _no_progress)
-        survey = recording.survey()
-        notes = list(stats.notes) + list(recording.notes)
-        sources.append(
-            SourceReport(
-                file=recording.name,
-                root=layout.origin,
-                complete=survey.end.complete,
-                problem=survey.end.problem,
-                messages=survey.message_count,
-                stats=stats,
-                notes=tuple(notes),
-            )
-        )
-    stream.flush()
-    stream.disconnect()
+    # Written beside `out` and renamed into place when complete: a full disk or a signal
+    # leaves no partial .rrd behind (the file sink only logs its errors; flush raises).
+    with whole_file_or_none(out) as temp:
+        try:
+            stream.save(str(temp), default_blueprint=build_blueprint(layouts))
+            stream.send_recording_name(" vs ".join(labels))
+            log_view_coordinates(stream)
+            writer = ColumnWriter(stream)
+            for index, (recording, layout) in enumerate(zip(opened, layouts, strict=True)):
+                stats = _convert(stream, writer, recording, layout, index, progress or _no_progress)
+                survey = recording.survey()
+                notes = list(stats.notes) + list(recording.notes)
+                sources.append(
+                    SourceReport(
+                        file=recording.name,
+                        root=layout.origin,
+                        complete=survey.end.complete,
+                        problem=survey.end.problem,
+                        messages=survey.message_count,
+                        stats=stats,
+                        notes=tuple(notes),
+                    )
+                )
+            _flush(stream, out)
+        finally:
+            stream.disconnect()  # also after a failure: a live file sink hangs the exit
     return ViewReport(out, recording_id, tuple(sources))
+
+
+def _flush(stream: rr.RecordingStream, out: Path) -> None:
+    try:
+        stream.flush()
+    except RuntimeError as exc:  # "File-writer thread shut down prematurely"
+        raise RecordingError(
+            f"cannot write: Rerun's file writer stopped ({exc}: is the disk full?); "
+            "the partial output was removed",
+            Mark(str(out)),
+        ) from None
 
 
 def _convert(
