@@ -60,7 +60,9 @@ def info(
         typer.echo(report.to_json())
     else:
         typer.echo(_limit_behaviors(report.to_text(), len(report.behaviors)))
-    if not report.complete:
+    if report.damages:
+        error_line(f"{report.file}: warning: damaged recording: {report.problem}")
+    elif not report.complete:
         error_line(
             f"{report.file}: warning: incomplete recording: {report.problem}; "
             f"{report.messages} messages read (run `aeroexec recover`)"
@@ -129,11 +131,15 @@ def recover(
                     "source_complete": report.source_complete,
                     "stopped_at": report.stopped_at,
                     "problem": report.problem,
+                    "damages": [d.as_dict() for d in report.damages],
+                    "expected_messages": report.expected_messages,
                 },
                 indent=2,
             )
         )
     else:
         typer.echo(report.summary())
-        if report.problem:
-            typer.echo(f"{report.source}: stopped reading: {report.problem}")
+        for damage in report.damages:
+            typer.echo(f"{report.source}: not copied: {damage.describe()}")
+        if report.cut:
+            typer.echo(f"{report.source}: stopped reading: {report.cut}")

@@ -119,7 +119,16 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     run = read_run(path)
     notes: list[str] = []
     horizon = None
-    if not run.outcome.complete:
+    if run.outcome.intact_until_ns is not None:
+        # Damaged in the middle: what follows the first damage may lack what was lost
+        # there, so both runs are compared only before it.
+        horizon = run.outcome.intact_until_ns
+        run = read_run(path, horizon)
+        notes.append(
+            f"damaged recording ({run.outcome.problem}): compared the first "
+            f"{horizon / NS_PER_S:.1f} s ({_commands(len(run.outcome.commands))}) only"
+        )
+    elif not run.outcome.complete:
         # Compare both runs up to (not including) the last instant the file holds: the
         # messages of that instant may be only partly there.
         horizon = run.outcome.end_ns
@@ -162,6 +171,10 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
         output=str(options.output) if options.output is not None else None,
         notes=tuple(notes),
     )
+
+
+def _commands(count: int) -> str:
+    return f"{count} command{'s' if count != 1 else ''}"
 
 
 def replay_file(path: str, options: ReplayOptions) -> ReplayResult:
@@ -223,12 +236,23 @@ def diff_recordings(
     """What changed from the recording `base` to the recording `new`. A recording cut
     short limits the comparison to the time both files cover."""
     runs = [read_run(base), read_run(new)]
-    cuts = [r.outcome.end_ns for r in runs if not r.outcome.complete and r.outcome.end_ns]
+    limits: list[int] = []
+    why: list[str] = []
+    for path, run in zip((base, new), runs, strict=True):
+        outcome = run.outcome
+        if outcome.intact_until_ns is not None:
+            limits.append(outcome.intact_until_ns)
+            why.append(f"{path} is damaged ({outcome.problem})")
+        elif not outcome.complete and outcome.end_ns:
+            limits.append(outcome.end_ns)
+            why.append(f"{path} is incomplete ({outcome.problem})")
     notes: tuple[str, ...] = ()
-    if cuts:
-        horizon = min(cuts)
+    if limits:
+        # Both runs are cut at the same instant, so neither is compared with the other
+        # at a different time (the final state of one against a later one of the other).
+        horizon = min(limits)
         runs = [read_run(base, horizon), read_run(new, horizon)]
-        notes = (f"a recording is incomplete: compared the first {horizon / NS_PER_S:.1f} s only",)
+        notes = (f"{'; '.join(why)}: compared both on their first {horizon / NS_PER_S:.1f} s only",)
     return diff_outcomes(
         runs[0].outcome,
         runs[1].outcome,
