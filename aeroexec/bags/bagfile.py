@@ -10,6 +10,7 @@ later, while reading damaged chunks, is turned into one as well.
 from __future__ import annotations
 
 import os
+import re
 import struct
 from collections import Counter
 from collections.abc import Iterator
@@ -223,12 +224,25 @@ class BagFile:
 
 
 def _reason(exc: BaseException) -> str:
+    """What went wrong, in words: never a bare exception name or a stray number."""
+    if isinstance(exc, KeyError):
+        # rosbags looks a message's connection (or an index's chunk) up by id
+        key = exc.args[0] if exc.args else "?"
+        return (
+            f"the bag's index and data disagree (a record refers to id {key}, which is not defined)"
+        )
+    if isinstance(exc, AssertionError) and not str(exc):
+        # rosbags asserts that each message is where and when the index says
+        return "the bag's index and data disagree (a message is not what the index says)"
     # rosbags nests reasons as "...: ('Header could not be read from file.',)"
-    text = " ".join(str(exc).split()).replace("('", "").replace("',)", "")
+    text = _TUPLE_REPR.sub(r"\2", " ".join(str(exc).split()))
     while exc.__cause__ is not None and not text:
         exc = exc.__cause__
         text = " ".join(str(exc).split())
-    return text or type(exc).__name__
+    return text or f"unreadable data ({type(exc).__name__})"
+
+
+_TUPLE_REPR = re.compile(r"""\((['"])(.*?)\1,\)""")
 
 
 def open_bag(path: str | os.PathLike[str]) -> BagFile:

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from aeroexec.bags.bagfile import is_bag
+from aeroexec.bags.info import PROFILE as BAG_PROFILE
 from aeroexec.bags.info import bag_info
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.recording.info import recording_info
@@ -62,6 +63,8 @@ def info(
         typer.echo(_limit_behaviors(report.to_text(), len(report.behaviors)))
     if report.damages:
         error_line(f"{report.file}: warning: damaged recording: {report.problem}")
+    elif not report.complete and report.profile == BAG_PROFILE:
+        error_line(f"{report.file}: warning: damaged bag: {report.problem}")
     elif not report.complete:
         error_line(
             f"{report.file}: warning: incomplete recording: {report.problem}; "
