@@ -86,11 +86,12 @@ class SimulatedMachine(ExecutiveMachine):
             self.catalog, vehicle=self.vehicle, observers=[self.observer, self.recorder]
         )
         assert self.ex.initiation.ok, self.ex.initiation.error
-        # Take off first now and then, so flying behaviors get their chance.
-        if data.draw(st.integers(0, 3), label="take off") > 0:
-            if self.ex.activate_behavior("TAKE_OFF").ok:  # (refused on a low battery)
-                self.last_uid = 1
-                self.started_ns[1] = self.ex.clock.now_ns()
+        # Take off first, mostly, so flying behaviors get their chance (refused on a low
+        # battery).
+        take_off = data.draw(st.integers(0, 3), label="take off") > 0
+        if take_off and self.ex.activate_behavior("TAKE_OFF").ok:
+            self.last_uid = 1
+            self.started_ns[1] = self.ex.clock.now_ns()
 
     @rule(data=st.data())
     def activate(self, data: st.DataObject) -> None:
