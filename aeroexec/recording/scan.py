@@ -156,6 +156,11 @@ class RecordScanner:
             raise RecordingError(
                 f"first record is {_opcode_name(opcode)}, not a header (byte 8)", Mark(self.name)
             )
+        if length > self.size - len(MAGIC) - _PREFIX.size:
+            raise RecordingError(
+                f"the MCAP header record declares {length} bytes, more than the file holds",
+                Mark(self.name),
+            )
         body = stream.read(length)
         if len(body) < length:
             raise RecordingError("file ends inside the MCAP header record", Mark(self.name))
