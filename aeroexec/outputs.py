@@ -16,8 +16,12 @@ its last flush, so they write in place and keep what they can (see `Recorder`).
 
 from __future__ import annotations
 
+import contextlib
 import os
+import shutil
 import stat
+import tempfile
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -58,6 +62,60 @@ def whole_file_or_none(
     except BaseException:
         _remove(temp)
         raise
+
+
+class Pipe:
+    """A FIFO for a writer that must never see a write error, copied into a file.
+
+    Rerun's file sink deadlocks (in `save`, `flush` or `disconnect`, by chance) when a
+    write fails under it. Given this FIFO instead, it always writes successfully: a thread
+    copies what arrives into the real file with Python's own I/O, keeps draining after
+    a write error (a full disk), and `finish()` raises that `OSError` once the writer has
+    closed its end."""
+
+    def __init__(self, target: Path) -> None:
+        self._folder = tempfile.mkdtemp(prefix="aeroexec-pipe-")
+        self.path = Path(self._folder) / target.name
+        os.mkfifo(self.path)
+        self._target = target
+        self._error: OSError | None = None
+        self._opened = threading.Event()
+        self._thread = threading.Thread(target=self._pump, name="aeroexec-pipe", daemon=True)
+        self._thread.start()
+
+    def _pump(self) -> None:
+        with open(self.path, "rb") as source:
+            self._opened.set()
+            try:
+                sink = open(self._target, "wb")  # noqa: SIM115 (closed below)
+            except OSError as exc:
+                self._error, sink = exc, None
+            while block := source.read(1 << 16):
+                if sink is None:
+                    continue  # keep draining: the writer must not block or fail
+                try:
+                    sink.write(block)
+                except OSError as exc:
+                    self._error = exc
+                    with contextlib.suppress(OSError):
+                        sink.close()
+                    sink = None
+            if sink is not None:
+                try:
+                    sink.close()
+                except OSError as exc:
+                    self._error = exc
+
+    def finish(self) -> None:
+        """Wait for the copy to end (the writer closed the FIFO); raise its write error."""
+        if not self._opened.is_set():
+            # The writer never opened the FIFO: open and close it so the thread returns.
+            with contextlib.suppress(OSError):
+                os.close(os.open(self.path, os.O_WRONLY | os.O_NONBLOCK))
+        self._thread.join()
+        shutil.rmtree(self._folder, ignore_errors=True)
+        if self._error is not None:
+            raise self._error
 
 
 def _check_replaceable(final: Path, error: type[AeroexecError]) -> None:

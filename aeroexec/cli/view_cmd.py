@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import os
-from collections.abc import Iterator
-from contextlib import AbstractContextManager, contextmanager
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -30,21 +28,6 @@ def _progress(description: str, total: int) -> AbstractContextManager[Advance]:
     from aeroexec.viz.progress import progress_bar
 
     return progress_bar(f"converting {description}", total)
-
-
-@contextmanager
-def _quiet_file_sink() -> Iterator[None]:
-    """While rerun is imported (its logger reads RUST_LOG once, then), silence the log
-    lines its file sink prints when a write fails: write_view reports that in one line.
-    A user's own RUST_LOG is left alone, and the viewer process does not inherit this."""
-    if "RUST_LOG" in os.environ:
-        yield
-        return
-    os.environ["RUST_LOG"] = "warn,re_log_encoding::rrd=off,re_sdk::recording_stream=off"
-    try:
-        yield
-    finally:
-        os.environ.pop("RUST_LOG", None)
 
 
 def _summary(report: ViewReport) -> None:
@@ -127,9 +110,8 @@ def view(
     output = save if save is not None else _default_output(recording, other)
     inputs = [recording] if other is None else [recording, other]
 
-    with _quiet_file_sink():
-        from aeroexec.viz import viewer
-        from aeroexec.viz.view import write_view
+    from aeroexec.viz import viewer
+    from aeroexec.viz.view import write_view
 
     report = write_view(inputs, output, progress=_progress)
     _summary(report)

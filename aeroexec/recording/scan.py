@@ -158,7 +158,8 @@ class RecordScanner:
             )
         if length > self.size - len(MAGIC) - _PREFIX.size:
             raise RecordingError(
-                f"the MCAP header record declares {length} bytes, more than the file holds",
+                f"file ends inside the MCAP header record ({length} bytes declared, "
+                f"{self.size - len(MAGIC) - _PREFIX.size} left)",
                 Mark(self.name),
             )
         body = stream.read(length)

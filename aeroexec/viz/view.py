@@ -23,7 +23,7 @@ from pathlib import Path
 import rerun as rr
 
 from aeroexec.errors import Mark, RecordingError
-from aeroexec.outputs import whole_file_or_none
+from aeroexec.outputs import Pipe, whole_file_or_none
 from aeroexec.recording.reader import Recording, open_recording
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.viz.blueprint import build_blueprint
@@ -139,10 +139,13 @@ def write_view(
     stream.set_log_tick_enabled(False)
     sources = []
     # Written beside `out` and renamed into place when complete: a full disk or a signal
-    # leaves no partial .rrd behind (the file sink only logs its errors; flush raises).
+    # leaves no partial .rrd behind.
     with whole_file_or_none(out) as temp:
+        # Rerun writes into a FIFO that a thread copies to `temp`: its file sink can
+        # deadlock when a write fails under it (a full disk); ours reports the error.
+        pipe = Pipe(temp)
         try:
-            stream.save(str(temp), default_blueprint=build_blueprint(layouts))
+            stream.save(str(pipe.path), default_blueprint=build_blueprint(layouts))
             stream.send_recording_name(" vs ".join(labels))
             log_view_coordinates(stream)
             writer = ColumnWriter(stream)
@@ -161,21 +164,11 @@ def write_view(
                         notes=tuple(notes),
                     )
                 )
-            _flush(stream, out)
+            stream.flush()
         finally:
-            stream.disconnect()  # also after a failure: a live file sink hangs the exit
+            stream.disconnect()  # closes the FIFO: the copy ends
+            pipe.finish()  # raises the copy's write error, if any
     return ViewReport(out, recording_id, tuple(sources))
-
-
-def _flush(stream: rr.RecordingStream, out: Path) -> None:
-    try:
-        stream.flush()
-    except RuntimeError as exc:  # "File-writer thread shut down prematurely"
-        raise RecordingError(
-            f"cannot write: Rerun's file writer stopped ({exc}: is the disk full?); "
-            "the partial output was removed",
-            Mark(str(out)),
-        ) from None
 
 
 def _convert(
