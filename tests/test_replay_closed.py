@@ -249,7 +249,7 @@ def test_a_mission_that_now_raises(recs: dict[str, Path], work: Path) -> None:
         "#0 TAKE_OFF now refused by the mission API: the executive never saw it"
     )
     assert any(
-        "the replayed mission raised: " in note and "recurrent" in note for note in result.notes
+        "the replayed mission raised at " in note and "recurrent" in note for note in result.notes
     )
 
 

@@ -150,7 +150,8 @@ def replay_closed(
                 world=world,
             )
         if not result.outcome.returned:
-            notes.append(f"the replayed mission raised: {result.outcome.error}")
+            where = f" at {result.outcome.where}" if result.outcome.where else ""
+            notes.append(f"the replayed mission raised{where}: {result.outcome.error}")
     outcome = builder.outcome(f"{run.outcome.source} (replay)", metadata=dict(metadata))
     return outcome, tuple(notes)
 
