@@ -48,6 +48,10 @@ class AeroexecError(Exception):
         self.message = message
         self.mark = mark
 
+    def __reduce__(self) -> tuple[object, ...]:
+        # Crosses process boundaries (replay --jobs) with its mark.
+        return (type(self), (self.message, self.mark))
+
     def __str__(self) -> str:
         if self.mark is None:
             return one_line(self.message)
@@ -80,3 +84,20 @@ class BehaviorError(AeroexecError):
 
 class ViewerError(AeroexecError):
     """The viewer (Rerun's) cannot be started or cannot serve."""
+
+
+class OutputLost(BaseException):
+    """An output file could not be written (a full disk, a file size limit): the command
+    must stop, and `error` says what was kept or removed.
+
+    A `BaseException`, like `KeyboardInterrupt`: the writer fails inside the session (the
+    recorder is a bus observer), and no mission's or behavior's `except Exception:` may
+    swallow it and fly on unrecorded.
+    """
+
+    def __init__(self, error: AeroexecError) -> None:
+        super().__init__(str(error))
+        self.error = error
+
+    def __reduce__(self) -> tuple[object, ...]:
+        return (type(self), (self.error,))

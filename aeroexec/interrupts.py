@@ -27,6 +27,8 @@ from types import FrameType
 HANDLED: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 _pending: int | None = None
+#: How many `signals_as_interrupts` blocks are active (they may nest).
+_handling = 0
 
 
 class Interrupted(BaseException):
@@ -39,6 +41,10 @@ class Interrupted(BaseException):
         self.notes: list[str] = []
         super().__init__(f"interrupted by {self.name}")
 
+    def __reduce__(self) -> tuple[object, ...]:
+        # Raised in a worker process (replay --jobs), re-raised in the parent.
+        return (_rebuild, (self.signum, tuple(self.notes)))
+
     def line(self) -> str:
         """The one line the command line prints."""
         return "; ".join([f"interrupted by {self.name}", *self.notes])
@@ -49,9 +55,21 @@ class Interrupted(BaseException):
         return 128 + self.signum
 
 
+def _rebuild(signum: int, notes: tuple[str, ...]) -> Interrupted:
+    stop = Interrupted(signum)
+    stop.notes.extend(notes)
+    return stop
+
+
 def pending() -> int | None:
     """The signal waiting to be acted on, if any (without consuming it)."""
     return _pending
+
+
+def handling() -> bool:
+    """Are signals being turned into `Interrupted` here? Then a `KeyboardInterrupt` can
+    only have been raised by code (a mission's own `raise KeyboardInterrupt`)."""
+    return _handling > 0
 
 
 def check() -> None:
@@ -71,6 +89,23 @@ def _note(signum: int, frame: FrameType | None) -> None:
     _pending = signum
 
 
+def _note_only(signum: int, frame: FrameType | None) -> None:
+    global _pending
+    _pending = signum
+
+
+def in_worker_process(signums: tuple[signal.Signals, ...] = HANDLED) -> None:
+    """For a worker process of a command (replay --jobs): signals are noted for `check()`
+    and never raise at once. A Ctrl-C reaches the parent and its workers alike, and the
+    parent passes a signal it got alone on to them, so a worker may see the same signal
+    twice: that must not count as the "second signal" escape hatch, which could stop it
+    in the middle of writing a record. (The parent keeps the escape hatch.)"""
+    global _handling
+    for signum in signums:
+        signal.signal(signum, _note_only)
+    _handling = 1
+
+
 @contextmanager
 def signals_as_interrupts(signums: tuple[signal.Signals, ...] = HANDLED) -> Iterator[None]:
     """Within the block, `signums` are noted for `check()` instead of killing the process.
@@ -78,16 +113,19 @@ def signals_as_interrupts(signums: tuple[signal.Signals, ...] = HANDLED) -> Iter
     Only the main thread can install handlers; elsewhere (a worker thread, an embedding
     application) the block leaves the handlers as they are.
     """
-    global _pending
+    global _pending, _handling
     previous: dict[int, object] = {}
     try:
         for signum in signums:
             previous[signum] = signal.signal(signum, _note)
     except ValueError:  # not the main thread
         pass
+    installed = signal.SIGINT in previous
+    _handling += installed
     try:
         yield
     finally:
+        _handling -= installed
         for signum, handler in previous.items():
             signal.signal(signum, handler)  # type: ignore[arg-type]
         _pending = None

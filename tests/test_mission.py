@@ -191,7 +191,9 @@ def test_run_exit_1_when_the_mission_raises(tmp_path: Path) -> None:
         check=False,
     )
     assert result.returncode == 1
-    assert result.stderr.strip() == "mission failed: RuntimeError: battery sensor disagrees"
+    # The mission's own line, without --debug.
+    expected = f"{path}:5: mission failed: RuntimeError: battery sensor disagrees"
+    assert result.stderr.strip() == expected
     assert "Traceback" not in result.stdout + result.stderr
     debug = runner.invoke(app, ["run", str(path), "--debug"])
     assert debug.exit_code == 1

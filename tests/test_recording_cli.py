@@ -179,7 +179,12 @@ def test_recover_truncated_file_gives_a_complete_file(session_file: Path, tmp_pa
         ]
     assert recovered == original[: len(recovered)]
     assert attachments == ["catalog.yaml", "mission.py", "world.yaml"]
-    assert metadata == ["aeroexec", "behaviors"]
+    # The session's own metadata, then what recover says about the copy: cut short.
+    assert metadata == ["aeroexec", "behaviors", "aeroexec_recover"]
+    with open(fixed, "rb") as stream:
+        said = {m.name: m.metadata for m in make_reader(stream).iter_metadata()}
+    assert said["aeroexec_recover"]["cut"].startswith("chunk record at byte")
+    assert said["aeroexec_recover"]["messages_copied"] == str(len(recovered))
     code, out, _ = _invoke("info", str(fixed), "--format", "json")
     assert json.loads(out)["complete"] is True
 

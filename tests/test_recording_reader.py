@@ -113,7 +113,7 @@ def test_file_cut_right_after_a_flushed_chunk_loses_nothing_before_it(tmp_path: 
     assert not recording.complete and "no footer" in (recording.problem or "")
 
 
-def test_corrupt_chunk_stops_reading_there(session_file: Path, tmp_path: Path) -> None:
+def test_a_damaged_chunk_is_stepped_over_and_reported(session_file: Path, tmp_path: Path) -> None:
     data = bytearray(session_file.read_bytes())
     middle = len(data) // 2
     data[middle : middle + 64] = bytes(64)
@@ -123,8 +123,17 @@ def test_corrupt_chunk_stops_reading_there(session_file: Path, tmp_path: Path) -
     got = [(m.channel.topic, m.log_time_ns, m.data) for m in recording.messages()]
     full = _mcap_messages(session_file)
     assert 0 < len(got) < len(full)
-    assert got == full[: len(got)]
+    # What was read is the whole stream less one run of messages: nothing invented.
+    head = next(i for i, (a, b) in enumerate(zip(got, full, strict=False)) if a != b)
+    lost = len(full) - len(got)
+    assert got[:head] == full[:head]
+    assert got[head:] == full[head + lost :]
+    end = recording.end
     assert not recording.complete and recording.problem
+    assert end.footer and len(end.damages) == 1
+    assert end.expected_messages == len(full) and end.messages_read == len(got)
+    assert end.damages[0].messages == lost
+    assert f"{len(got)} of the {len(full)} messages read" in recording.problem
 
 
 @pytest.mark.parametrize(

@@ -64,7 +64,7 @@ def one_error_line(stderr: str) -> str:
 
 # -- results and exit codes ------------------------------------------------------------------
 def test_check_passes_on_unchanged_recordings(flights: Path) -> None:
-    code, out, err = cli("replay", str(flights), "--check")
+    code, out, err = cli("replay", str(flights), "--check", "--trust-recording")
     assert code == 0
     lines = out.strip().splitlines()
     assert lines == [
@@ -90,14 +90,23 @@ def test_check_fails_on_differences(flights: Path, narrowed: Path) -> None:
 
 
 def test_without_check_differences_do_not_fail(flights: Path, narrowed: Path) -> None:
-    code, out, _ = cli("replay", str(flights / "survey.mcap"), "--catalog", str(narrowed))
+    code, out, _ = cli(
+        "replay", str(flights / "survey.mcap"), "--catalog", str(narrowed), "--trust-recording"
+    )
     assert code == 0
     assert "3 differences (6 commands compared)" in out
 
 
 def test_junit_has_one_testcase_per_recording(flights: Path, narrowed: Path) -> None:
     code, out, _ = cli(
-        "replay", str(flights), "--catalog", str(narrowed), "--check", "--format", "junit"
+        "replay",
+        str(flights),
+        "--catalog",
+        str(narrowed),
+        "--check",
+        "--format",
+        "junit",
+        "--trust-recording",
     )
     assert code == 1
     suite = ET.fromstring(out)
@@ -160,7 +169,14 @@ def test_mode_option_forces_open_loop(flights: Path, narrowed: Path) -> None:
 
 def test_globs_and_out_dir(flights: Path, work: Path) -> None:
     out_dir = work / "replays"
-    code, out, _ = cli("replay", str(flights / "[as]*.mcap"), "--out-dir", str(out_dir), "--check")
+    code, out, _ = cli(
+        "replay",
+        str(flights / "[as]*.mcap"),
+        "--out-dir",
+        str(out_dir),
+        "--check",
+        "--trust-recording",
+    )
     assert code == 0
     assert "2 recordings: 0 with differences, 2 without, 0 unreadable" in out
     assert sorted(p.name for p in out_dir.iterdir()) == ["appendix_c.mcap", "survey.mcap"]
@@ -170,7 +186,7 @@ def test_globs_and_out_dir(flights: Path, work: Path) -> None:
 
 def test_output_file_is_byte_identical(flights: Path, work: Path) -> None:
     out = work / "one.mcap"
-    code, text, _ = cli("replay", str(flights / "watch.mcap"), "-o", str(out))
+    code, text, _ = cli("replay", str(flights / "watch.mcap"), "-o", str(out), "--trust-recording")
     assert code == 0
     assert f"replay written to {out}" in text
     assert out.read_bytes() == (flights / "watch.mcap").read_bytes()

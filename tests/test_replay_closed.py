@@ -42,6 +42,9 @@ def recs(work: Path) -> dict[str, Path]:
 
 
 def replay(path: Path, catalog: Path | None = None, **options: Any) -> ReplayResult:
+    """Replay one of this module's own recordings, running its stored script (these
+    tests are about script replays; the untrusted default is tested below)."""
+    options.setdefault("trust_recording", True)
     return replay_recording(
         path, ReplayOptions(catalog=str(catalog) if catalog else None, **options)
     )
@@ -246,7 +249,7 @@ def test_a_mission_that_now_raises(recs: dict[str, Path], work: Path) -> None:
         "#0 TAKE_OFF now refused by the mission API: the executive never saw it"
     )
     assert any(
-        "the replayed mission raised: " in note and "recurrent" in note for note in result.notes
+        "the replayed mission raised at " in note and "recurrent" in note for note in result.notes
     )
 
 

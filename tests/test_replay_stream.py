@@ -119,7 +119,9 @@ def test_truncated_file_is_read_up_to_the_cut(recs: dict[str, Path], work: Path)
     assert run.text("mission.py") is not None  # attachments come first: still there
 
 
-def test_corrupt_chunk_stops_the_read_there(recs: dict[str, Path], work: Path) -> None:
+def test_a_corrupt_chunk_is_reported_and_comparisons_stop_before_it(
+    recs: dict[str, Path], work: Path
+) -> None:
     path = recs["appendix_c"]
     with open(path, "rb") as stream:
         summary = make_reader(stream).get_summary()
@@ -140,13 +142,24 @@ def test_corrupt_chunk_stops_the_read_there(recs: dict[str, Path], work: Path) -
     run = read_run(broken)
     assert not run.outcome.complete
     assert run.outcome.problem == (
-        f"corrupt chunk at byte {chunk.chunk_start_offset}: "
-        + run.outcome.problem.split(": ", 1)[1]
+        f"1 damaged region: chunk at byte {chunk.chunk_start_offset}: CRC mismatch "
+        f"(messages lost, log time {chunk.message_start_time / 1e9:.3f} .. "
+        f"{chunk.message_end_time / 1e9:.3f} s)"
     )
-    assert 5 <= len(run.outcome.commands) < 9
-    result = replay_recording(broken, ReplayOptions())
+    # The read goes on after the damaged chunk: every command but the one it held...
+    original = extract_outcome(path).commands
+    lost = [c for c in original if chunk.message_start_time <= c.time_ns <= chunk.message_end_time]
+    assert len(lost) == 1
+    assert [c.time_ns for c in run.outcome.commands] == [
+        c.time_ns for c in original if c not in lost
+    ]
+    # ...but comparisons stop before it: what it held is lost.
+    assert run.outcome.intact_until_ns == chunk.message_start_time
+    result = replay_recording(broken, ReplayOptions(trust_recording=True))
     assert result.diff is not None and result.diff.equal
-    assert any(note.startswith("incomplete recording (corrupt chunk") for note in result.notes)
+    assert any(
+        note.startswith("damaged recording (1 damaged region: chunk") for note in result.notes
+    )
 
 
 def _peak_kib(action: object) -> float:

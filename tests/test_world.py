@@ -133,7 +133,7 @@ def test_errors_name_the_place(text: str, where: str, message: str) -> None:
 
 
 def test_missing_or_unreadable_files_are_world_errors(tmp_path: Path) -> None:
-    with pytest.raises(WorldError, match="cannot read world file"):
+    with pytest.raises(WorldError, match="no such file"):
         load_world(tmp_path / "nowhere.yaml")
     binary = tmp_path / "binary.yaml"
     binary.write_bytes(b"name: \xff\xfe\n")

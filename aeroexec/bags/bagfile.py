@@ -10,6 +10,7 @@ later, while reading damaged chunks, is turned into one as well.
 from __future__ import annotations
 
 import os
+import re
 import struct
 from collections import Counter
 from collections.abc import Iterator
@@ -22,6 +23,8 @@ from rosbags.rosbag1.reader import decompressors
 
 from aeroexec.bags.types import ros1_name
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.inputs import is_regular_file, regular_file
+from aeroexec.interrupts import check as check_interrupts
 
 MAGIC = b"#ROSBAG V2.0\n"
 _MAGIC_PREFIX = b"#ROSBAG V"
@@ -36,6 +39,8 @@ def is_bag(path: str | os.PathLike[str]) -> bool:
     file = Path(path)
     if file.suffix.lower() == ".bag":
         return True
+    if not is_regular_file(file):  # opening a FIFO to look would block
+        return False
     try:
         with open(file, "rb") as stream:
             return stream.read(len(_MAGIC_PREFIX)) == _MAGIC_PREFIX
@@ -97,13 +102,9 @@ def _read_header(stream: object, name: str) -> _Header:
 
 
 def _precheck(file: Path, name: str) -> _Header:
-    if file.is_dir():
-        raise RecordingError("is a directory, not a ROS 1 bag file", Mark(name))
+    size = regular_file(file, "a ROS 1 bag file", RecordingError)
     try:
-        size = file.stat().st_size
         stream = open(file, "rb")  # noqa: SIM115 (closed below)
-    except FileNotFoundError:
-        raise RecordingError("no such file", Mark(name)) from None
     except OSError as exc:
         raise RecordingError(f"cannot read: {exc.strerror or exc}", Mark(name)) from None
     with stream:
@@ -194,6 +195,7 @@ class BagFile:
         last = self.start_ns
         try:
             for connection, time_ns, data in self._reader.messages():
+                check_interrupts()
                 count += 1
                 last = time_ns
                 yield by_id[connection.id], time_ns, data
@@ -222,12 +224,25 @@ class BagFile:
 
 
 def _reason(exc: BaseException) -> str:
+    """What went wrong, in words: never a bare exception name or a stray number."""
+    if isinstance(exc, KeyError):
+        # rosbags looks a message's connection (or an index's chunk) up by id
+        key = exc.args[0] if exc.args else "?"
+        return (
+            f"the bag's index and data disagree (a record refers to id {key}, which is not defined)"
+        )
+    if isinstance(exc, AssertionError) and not str(exc):
+        # rosbags asserts that each message is where and when the index says
+        return "the bag's index and data disagree (a message is not what the index says)"
     # rosbags nests reasons as "...: ('Header could not be read from file.',)"
-    text = " ".join(str(exc).split()).replace("('", "").replace("',)", "")
+    text = _TUPLE_REPR.sub(r"\2", " ".join(str(exc).split()))
     while exc.__cause__ is not None and not text:
         exc = exc.__cause__
         text = " ".join(str(exc).split())
-    return text or type(exc).__name__
+    return text or f"unreadable data ({type(exc).__name__})"
+
+
+_TUPLE_REPR = re.compile(r"""\((['"])(.*?)\1,\)""")
 
 
 def open_bag(path: str | os.PathLike[str]) -> BagFile:

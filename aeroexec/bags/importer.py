@@ -18,10 +18,8 @@ that turns out damaged halfway leaves no half-written file behind.
 
 from __future__ import annotations
 
-import contextlib
 import heapq
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,6 +39,7 @@ from aeroexec.bags.reconstruct import ACTIVATE, INHIBIT, Reconstructor, Stats
 from aeroexec.bags.sink import COMPRESSIONS, RAW_PREFIX, ImportSink
 from aeroexec.bags.types import Decoder, TypeResolver
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.outputs import whole_file_or_none
 from aeroexec.recording.foxglove import first_scene, vehicle_frame
 from aeroexec.recording.writer import METADATA_NAME
 
@@ -476,33 +475,18 @@ def import_bag(
     with open_bag(bag_path) as bag:
         if target.exists() and target.resolve() == bag.path.resolve():
             raise RecordingError("the output would overwrite the bag", Mark(str(output)))
-        try:
-            handle, temp = tempfile.mkstemp(
-                prefix=f".{target.name}.", suffix=".partial", dir=target.parent or None
+        # Written beside the target, renamed into place only when complete (and created
+        # like any other file: 0666 less the umask, not mkstemp's 0600).
+        with whole_file_or_none(target) as temp, open(temp, "wb") as stream:
+            sink = ImportSink(stream, drone, compression)
+            run = _Import(bag, mapping, drone, sink)
+            sink.start(
+                _metadata(bag, mapping, drone, run.mapped),
+                {MAPPING_ATTACHMENT: mapping.text.encode("utf-8")},
             )
-        except OSError as exc:
-            raise RecordingError(
-                f"cannot write: {exc.strerror or exc}", Mark(str(output))
-            ) from None
-        try:
-            with os.fdopen(handle, "wb") as stream:
-                sink = ImportSink(stream, drone, compression)
-                run = _Import(bag, mapping, drone, sink)
-                sink.start(
-                    _metadata(bag, mapping, drone, run.mapped),
-                    {MAPPING_ATTACHMENT: mapping.text.encode("utf-8")},
-                )
-                run.run()
-                sink.finish()
-            os.replace(temp, target)
-        except OSError as exc:
-            _remove(temp)
-            raise RecordingError(
-                f"cannot write: {exc.strerror or exc}", Mark(str(output))
-            ) from None
-        except BaseException:
-            _remove(temp)
-            raise
+            run.run()
+            sink.finish()
+            stream.flush()  # a full disk is an error here, inside the block
         stats = run.recon.stats
         return ImportReport(
             source=bag.name,
@@ -520,8 +504,3 @@ def import_bag(
             reconstructed_inhibitions=stats.inhibitions,
             notes=tuple(run.final_notes()),
         )
-
-
-def _remove(path: str) -> None:
-    with contextlib.suppress(OSError):
-        os.unlink(path)

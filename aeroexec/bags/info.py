@@ -1,7 +1,9 @@
 """`aeroexec info BAG`: a ROS 1 bag summarized in the same report as an MCAP recording.
 
 Topics with their ROS 1 types and message counts, time span, compression, chunk and
-connection counts: all from the bag's index (no message is read or decoded). The report
+connection counts from the bag's index; every chunk is then read (decompressed, with its
+checksums, but no message decoded), so a bag `import` would refuse is not called
+complete. The report
 is `aeroexec.recording.info.InfoReport`, so text and JSON look like those of a recording
 (`messages`, `channels` as topic -> count, `channel_details`); a topic with several
 connections (one per publisher) is one channel here, and the metadata counts connections.
@@ -11,7 +13,8 @@ from __future__ import annotations
 
 import os
 
-from aeroexec.bags.bagfile import BagConnection, open_bag
+from aeroexec.bags.bagfile import BagConnection, BagFile, open_bag
+from aeroexec.errors import RecordingError
 from aeroexec.recording.info import ChannelSummary, InfoReport
 
 PROFILE = "ros1"
@@ -21,6 +24,16 @@ METADATA_NAME = "ros1_bag"
 
 def _types(connections: list[BagConnection]) -> str:
     return ", ".join(dict.fromkeys(c.type for c in connections))
+
+
+def _first_damage(bag: BagFile) -> str | None:
+    """Decompress every chunk (messages are not decoded): the first damage, or None."""
+    try:
+        for _ in bag.messages():
+            pass
+    except RecordingError as exc:
+        return exc.message
+    return None
 
 
 def bag_info(path: str | os.PathLike[str]) -> InfoReport:
@@ -54,6 +67,9 @@ def bag_info(path: str | os.PathLike[str]) -> InfoReport:
             "a ROS 1 bag: `aeroexec import` converts it to an aeroexec recording "
             "(`aeroexec replay` takes it directly)"
         ]
+        # The index alone would call a bag complete whose chunks `import` then refuses
+        # (an lz4 checksum, a message where the index says none is): read them all.
+        problem = _first_damage(bag)
         multi = sum(1 for group in by_topic.values() if len(group) > 1)
         if multi:
             notes.append(
@@ -63,8 +79,8 @@ def bag_info(path: str | os.PathLike[str]) -> InfoReport:
             file=bag.name,
             profile=PROFILE,
             library=LIBRARY,
-            complete=True,
-            problem=None,
+            complete=problem is None,
+            problem=problem,
             messages=bag.message_count,
             channels=channels,
             start_ns=bag.start_ns,

@@ -24,13 +24,14 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 from importlib import resources
 from pathlib import Path
 
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import CatalogError, Mark, RecordingError
+from aeroexec.inputs import read_text
 
 #: The mapping format's version (the `version:` key).
 FORMAT_VERSION = 1
@@ -116,14 +117,10 @@ def load_mapping(path: str | os.PathLike[str] | None = None) -> Mapping:
     with file:line:col for anything wrong in it."""
     file = Path(path) if path is not None else default_mapping_path()
     name = str(path) if path is not None else DEFAULT_MAPPING_NAME
-    if file.is_dir():
-        raise RecordingError("is a directory, not a mapping file", Mark(name))
     try:
-        text = file.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise RecordingError("not a text file (invalid UTF-8)", Mark(name)) from None
-    except OSError as exc:
-        raise RecordingError(f"cannot read: {exc.strerror or exc}", Mark(name)) from None
+        text = read_text(file, "a mapping file", RecordingError)
+    except RecordingError as exc:  # named as the user named it (or as the default)
+        raise RecordingError(exc.message, replace(exc.mark or Mark(name), file=name)) from None
     return parse_mapping(text, name)
 
 

@@ -13,10 +13,17 @@ from aeroexec.executive.beliefs import Beliefs, Compound, parse_query
 from aeroexec.executive.messages import EventCode
 from aeroexec.vehicles.base import Vec3, VehicleCommandError
 
-#: No progress for this long (s) is WRONG_PROGRESS, for every goal-seeking behavior.
 #: Vehicle faults that end a motion behavior with PROCESS_FAILURE: the link to the
 #: autopilot is gone, or the pilot/autopilot took the vehicle out of the commanded mode.
 LINK_FAULTS = ("link_lost", "mode_changed")
+#: The battery is empty: the vehicle is landing by force and accepts no other command,
+#: so no motion goal but landing can be reached any more.
+POWER_FAULTS = ("battery_empty",)
+#: A motor has seized: the vehicle cannot hold a hover (the simulator freezes it where it
+#: is, which must not pass for hovering). Behaviors that move are caught by their
+#: progress watch instead (WRONG_PROGRESS, with the fault in the event's detail).
+MOTOR_FAULTS = ("stuck_motor",)
+#: No progress for this long (s) is WRONG_PROGRESS, for every goal-seeking behavior.
 PROGRESS_WINDOW = 5.0
 #: A vehicle at or below this speed (m/s) counts as stopped.
 STOPPED_SPEED = 0.1
@@ -108,7 +115,7 @@ class MotionBehavior(Behavior):
     """
 
     _keep_command = False
-    fails_on_faults = LINK_FAULTS
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS
 
     def achieved(self, detail: str = "") -> Finished:
         self._keep_command = True

@@ -7,6 +7,9 @@ from collections.abc import Mapping
 from typing import Any
 
 from aeroexec.behaviors._support import (
+    LINK_FAULTS,
+    MOTOR_FAULTS,
+    POWER_FAULTS,
     PROGRESS_WINDOW,
     STOPPED_SPEED,
     MotionBehavior,
@@ -27,6 +30,7 @@ class KeepHovering(MotionBehavior):
     name = "KEEP_HOVERING"
     argument_names = ("DURATION", "ARUCO")
     default_duration = 5.0
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)
@@ -52,6 +56,7 @@ class StartHovering(MotionBehavior):
 
     name = "START_HOVERING"
     argument_names = ()
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)

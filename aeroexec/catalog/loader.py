@@ -29,6 +29,7 @@ from aeroexec.catalog.model import (
 )
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import CatalogError, Mark
+from aeroexec.inputs import read_text
 
 TOP_LEVEL_TAGS = (
     "behavior_descriptors",
@@ -76,27 +77,9 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
 
 
 def read_catalog_text(path: str | Path) -> tuple[str, str]:
-    """The catalog's text and the name to show for it; `CatalogError` if unreadable."""
-    file = str(path)
-    p = Path(path)
-    if not p.exists():
-        raise CatalogError("no such file", Mark(file))
-    if p.is_dir():
-        raise CatalogError("is a directory, not a catalog file", Mark(file))
-    try:
-        return p.read_text(encoding="utf-8"), file
-    except UnicodeDecodeError as exc:
-        raise CatalogError(f"not UTF-8 text (byte {exc.start})", _byte_mark(file, exc)) from None
-    except OSError as exc:
-        raise CatalogError(f"cannot read: {exc.strerror}", Mark(file)) from None
-
-
-def _byte_mark(file: str, exc: UnicodeDecodeError) -> Mark:
-    """Line and column (in characters) of the first byte that is not UTF-8."""
-    data = bytes(exc.object)
-    start = data.rfind(b"\n", 0, exc.start) + 1
-    column = len(data[start : exc.start].decode("utf-8", "replace")) + 1
-    return Mark(file, data.count(b"\n", 0, exc.start) + 1, column)
+    """The catalog's text and the name to show for it; `CatalogError` if unreadable
+    (missing, not a regular file, too large, not UTF-8)."""
+    return read_text(path, "a catalog file", CatalogError), str(path)
 
 
 def read_catalog(path: str | Path) -> Catalog:

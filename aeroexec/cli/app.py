@@ -14,8 +14,9 @@ from typing import Any, TypeVar
 import typer
 
 from aeroexec import __version__
-from aeroexec.errors import AeroexecError
+from aeroexec.errors import AeroexecError, OutputLost
 from aeroexec.interrupts import Interrupted, signals_as_interrupts
+from aeroexec.interrupts import check as check_interrupts
 
 app = typer.Typer(
     name="aeroexec",
@@ -56,19 +57,25 @@ def error_line(message: str) -> None:
 
 
 def guarded(func: F) -> F:
-    """Turn aeroexec's input errors into one stderr line and exit code 2 (no traceback),
-    and SIGINT/SIGTERM/SIGHUP into a clean stop: the command's `finally` blocks finish
-    or remove its output, then one line and exit code 128 + signal."""
+    """Turn aeroexec's input errors (and outputs it could not write) into one stderr
+    line and exit code 2 (no traceback), and SIGINT/SIGTERM/SIGHUP into a clean stop:
+    the command's `finally` blocks finish or remove its output, then one line and exit
+    code 128 + signal."""
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
             with signals_as_interrupts():
-                return func(*args, **kwargs)
+                result = func(*args, **kwargs)
+                # A signal that came after the last safe point still stops with 128+N
+                # (the command's outputs are complete by now).
+                check_interrupts()
+                return result
         except Interrupted as exc:
             error_line(f"aeroexec: {exc.line()}")
             raise typer.Exit(exc.exit_code) from None
-        except AeroexecError as exc:
+        except (AeroexecError, OutputLost) as caught:
+            exc = caught.error if isinstance(caught, OutputLost) else caught
             text = str(exc)
             if exc.mark is None:
                 text = f"aeroexec: error: {text}"

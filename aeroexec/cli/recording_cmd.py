@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from aeroexec.bags.bagfile import is_bag
+from aeroexec.bags.info import PROFILE as BAG_PROFILE
 from aeroexec.bags.info import bag_info
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.recording.info import recording_info
@@ -60,7 +61,11 @@ def info(
         typer.echo(report.to_json())
     else:
         typer.echo(_limit_behaviors(report.to_text(), len(report.behaviors)))
-    if not report.complete:
+    if report.damages:
+        error_line(f"{report.file}: warning: damaged recording: {report.problem}")
+    elif not report.complete and report.profile == BAG_PROFILE:
+        error_line(f"{report.file}: warning: damaged bag: {report.problem}")
+    elif not report.complete:
         error_line(
             f"{report.file}: warning: incomplete recording: {report.problem}; "
             f"{report.messages} messages read (run `aeroexec recover`)"
@@ -129,11 +134,15 @@ def recover(
                     "source_complete": report.source_complete,
                     "stopped_at": report.stopped_at,
                     "problem": report.problem,
+                    "damages": [d.as_dict() for d in report.damages],
+                    "expected_messages": report.expected_messages,
                 },
                 indent=2,
             )
         )
     else:
         typer.echo(report.summary())
-        if report.problem:
-            typer.echo(f"{report.source}: stopped reading: {report.problem}")
+        for damage in report.damages:
+            typer.echo(f"{report.source}: not copied: {damage.describe()}")
+        if report.cut:
+            typer.echo(f"{report.source}: stopped reading: {report.cut}")

@@ -14,6 +14,7 @@ from aeroexec.catalog.loader import load_catalog
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
 from aeroexec.errors import AeroexecError, Mark, RecordingError
+from aeroexec.mission.script import load_mission
 from aeroexec.plugins import discover
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for, replay_many
@@ -128,23 +129,45 @@ def replay(
     output_format: FormatOption = OutputFormat.text,
     tolerance: ToleranceOption = 0.5,
     position_tolerance: PositionToleranceOption = 0.1,
+    mission: Annotated[
+        Path | None,
+        typer.Option(
+            "--mission",
+            "-m",
+            metavar="FILE",
+            help="Closed loop: run this mission script (your copy of the recorded one; "
+            "a note says when it differs).",
+        ),
+    ] = None,
+    trust_recording: Annotated[
+        bool,
+        typer.Option(
+            "--trust-recording",
+            help="Closed loop: run the mission script stored in the recording. It is code: "
+            "only for recordings you trust. Without this or --mission, the recorded "
+            "command stream is replayed and no code from the file runs.",
+        ),
+    ] = False,
 ) -> None:
     """Replay recorded missions against a new catalog or code version and report, per
     mission command, what changed: accepted/rejected, preemptions, capabilities and
     processes, end events and their times, the final vehicle state.
 
-    Closed loop re-runs the recorded mission script in the simulator with the recorded
-    world and seed and the behaviors of today's code (-b/--behaviors, the project's
-    [tool.aeroexec] behaviors, entry points, the standard library; never code a recording
-    carries); with the recording's own catalog and unchanged code it reproduces the
-    recording exactly (and -o writes the same bytes). Behaviors whose code differs from
-    the recorded code are reported as "code changed". Open loop feeds the recorded
-    commands, vehicle states and behavior outcomes to the executive and compares only
-    its decisions.
+    Closed loop re-simulates the mission with the recorded world and seed and the
+    behaviors of today's code (-b/--behaviors, the project's [tool.aeroexec] behaviors,
+    entry points, the standard library; never code a recording carries): it replays the
+    recorded mission commands, or runs a mission script -- yours (--mission FILE), or the
+    one stored in the recording if you trust it (--trust-recording); a recording is data
+    anyone may send you, and its script is code. With the recording's own catalog and
+    unchanged code the script replay reproduces the recording exactly (and -o writes the
+    same bytes). Behaviors whose code differs from the recorded code are reported as
+    "code changed". Open loop feeds the recorded commands, vehicle states and behavior
+    outcomes to the executive and compares only its decisions.
 
     \b
     Examples:
       aeroexec replay flight.mcap --catalog catalog/new.yaml
+      aeroexec replay flight.mcap --mission missions/appendix_c.py -o again.mcap
       aeroexec replay recordings/ --catalog new.yaml --check --jobs 4 --format junit > replay.xml
 
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
@@ -157,6 +180,8 @@ def replay(
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
     sources = behavior_sources(behaviors, project())
     discover(sources)  # so are bad behaviors (and the replays reuse what was found)
+    if mission is not None:
+        load_mission(mission)  # so is a bad mission script
     inputs = expand_inputs(recordings)
     paths = [i.path for i in inputs if i.error is None]
     _check_outputs(paths, output, out_dir)
@@ -166,6 +191,8 @@ def replay(
         output=output,
         tolerance=tolerance_of(tolerance, position_tolerance),
         behaviors=sources,
+        mission=str(mission) if mission is not None else None,
+        trust_recording=trust_recording,
     )
     progress = _progress(len(paths))
     if progress is None:

@@ -17,8 +17,15 @@ from aeroexec.cli.project import (
     project_behaviors,
 )
 from aeroexec.cli.tables import print_table
+from aeroexec.executive.clock import NS_PER_S
 from aeroexec.mission.activity import Activation, ActivityLog, format_arguments
-from aeroexec.mission.session import SessionConfig, SessionResult, simulate
+from aeroexec.mission.script import Ending
+from aeroexec.mission.session import (
+    DEFAULT_MAX_SIM_TIME_S,
+    SessionConfig,
+    SessionResult,
+    simulate,
+)
 
 
 def print_row(row: Activation) -> None:
@@ -34,6 +41,11 @@ def print_row(row: Activation) -> None:
             f"[{row.end_s:7.1f} s] end      {row.behavior} {row.end_code} "
             f"after {took:.1f} s{detail}"
         )
+
+
+def print_fault(time_ns: int, fault: str) -> None:
+    what = f"FAULT    vehicle: {fault}" if fault else "fault cleared"
+    typer.echo(f"[{time_ns / NS_PER_S:7.1f} s] {what}")
 
 
 def print_summary(result: SessionResult, clock: str = "simulated") -> None:
@@ -59,9 +71,11 @@ def print_summary(result: SessionResult, clock: str = "simulated") -> None:
     rejected = sum(not a.accepted for a in result.activations)
     x, y, z = result.final_state.position
     state = "flying" if result.final_state.flying else "landed"
+    fault = f", fault {result.vehicle_lost}" if result.vehicle_lost else ""
     typer.echo(
         f"{len(result.activations)} activations: {achieved} GOAL_ACHIEVED, {rejected} rejected; "
         f"{result.duration_s:.1f} s {clock}; vehicle {state} at ({x:.2f}, {y:.2f}, {z:.2f})"
+        f"{fault}"
     )
 
 
@@ -88,6 +102,14 @@ def run(
     ),
     behaviors: BehaviorsOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
+    max_sim_time: float = typer.Option(
+        DEFAULT_MAX_SIM_TIME_S,
+        "--max-sim-time",
+        metavar="SECONDS",
+        min=0.0,
+        help="Stop a mission that is still running after this much simulated time "
+        "(default: 24 h; 0: no limit). Recorded as the reason the session ended.",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the summary."),
     debug: bool = typer.Option(False, "--debug", help="Show the traceback if the mission raises."),
 ) -> None:
@@ -99,9 +121,13 @@ def run(
 
     Behaviors come from -b/--behaviors, the project's [tool.aeroexec] table (nearest
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
-    standard library. Exit code 0 when the mission function returned, 1 when it raised,
-    2 when an input (mission, catalog, world, configuration, behaviors) could not be
-    used, or a catalog behavior has no implementation.
+    standard library.
+
+    Exit code 0 when the mission function returned with the vehicle healthy; 1 when it
+    raised, called sys.exit() with a non-zero code, ran past --max-sim-time or lost its
+    vehicle (a fault such as an empty battery); 2 when an input (mission, catalog, world,
+    configuration, behaviors) could not be used, a catalog behavior has no implementation,
+    or the recording could not be written; 128+N when stopped by signal N.
     """
     settings = project()
     config = SessionConfig(
@@ -112,19 +138,33 @@ def run(
         record=record,
         behaviors=project_behaviors(behaviors, settings),
         allow_unimplemented=allow_unimplemented,
+        max_sim_time_s=max_sim_time or None,
     )
-    printer = [] if quiet else [ActivityLog(on_change=print_row)]
+    printer = [] if quiet else [ActivityLog(on_change=print_row, on_fault=print_fault)]
     result = simulate(config, observers=printer, announce=error_line)
     print_summary(result)
     finish(result, debug)
 
 
 def finish(result: SessionResult, debug: bool) -> None:
-    """Say where the recording is, and exit 1 (with the reason) if the mission raised."""
+    """Say where the recording is, and exit 1 (with the reason, at the mission's own
+    file:line) if the mission did not end well or lost its vehicle."""
     if result.recording:
         typer.echo(f"recorded to {result.recording}")
-    if not result.outcome.returned:
-        if debug and result.outcome.traceback:
-            typer.echo(result.outcome.traceback, err=True)
-        error_line(f"mission failed: {result.outcome.error}")
+    outcome = result.outcome
+    if not outcome.returned:
+        if debug and outcome.traceback:
+            typer.echo(outcome.traceback, err=True)
+        where = f"{outcome.where}: " if outcome.where else ""
+        if outcome.ending is Ending.TIME_LIMIT:
+            error_line(f"{where}mission stopped: {outcome.error} (--max-sim-time)")
+        else:
+            error_line(f"{where}mission failed: {outcome.error}")
+        raise typer.Exit(1)
+    if result.vehicle_lost:
+        since = next(
+            (t for t, fault in reversed(result.faults) if fault == result.vehicle_lost), None
+        )
+        at = f" at {since / NS_PER_S:.1f} s" if since is not None else ""
+        error_line(f"mission failed: the vehicle was lost: fault {result.vehicle_lost}{at}")
         raise typer.Exit(1)

@@ -72,10 +72,11 @@ class Behavior:
 
     #: The catalog name this class implements (e.g. "GO_TO_POINT").
     name: ClassVar[str] = ""
-    #: Vehicle faults (prefixes of `VehicleState.fault`) that end this behavior at once
-    #: with PROCESS_FAILURE: a behavior that commands motion cannot go on over a lost
-    #: link. Faults the behavior should judge itself (a stuck motor shows as
-    #: WRONG_PROGRESS) are not listed.
+    #: Vehicle faults (prefixes of `VehicleState.fault`) that make this behavior's goal
+    #: impossible: they end it at once with PROCESS_FAILURE "vehicle fault: <fault>" (a
+    #: behavior that commands motion cannot go on over a lost link or an empty battery).
+    #: Faults the behavior judges itself (a stuck motor stops progress: WRONG_PROGRESS)
+    #: are not listed; any ending but success names the vehicle's fault all the same.
     fails_on_faults: ClassVar[tuple[str, ...]] = ()
     #: The argument names `on_start` reads, as the behavior spells them; None: not
     #: declared. Declared names are matched to the catalog's regardless of case (a
@@ -238,9 +239,22 @@ class Behavior:
                 code, detail = EventCode.PROCESS_FAILURE, f"on_stop failed: {_describe(exc)}"
         self.process.stop()
         self._host.resources.cancel_resources(self.behavior_name)
+        if code is not EventCode.GOAL_ACHIEVED and code is not EventCode.INTERRUPTED:
+            detail = self._with_fault(detail)
         event = BehaviorEvent(self.behavior_name, self.uid, code, self._host.clock.now_ns(), detail)
         self._host.on_behavior_event(event)
         return event
+
+    def _with_fault(self, detail: str) -> str:
+        """`detail`, naming the vehicle's fault if it has one: a behavior that failed
+        while the vehicle was failing says so, whatever its own measure caught."""
+        try:
+            fault = self._host.vehicle.state().fault
+        except Exception:  # a vehicle that cannot say: the event goes out anyway
+            return detail
+        if not fault or fault in detail:
+            return detail
+        return f"{detail}; vehicle fault: {fault}" if detail else f"vehicle fault: {fault}"
 
 
 class GenericBehavior(Behavior):

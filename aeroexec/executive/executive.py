@@ -36,6 +36,25 @@ from aeroexec.vehicles.base import Vehicle
 Library = Mapping[str, type[Behavior]]
 
 
+class TimeLimitReached(BaseException):
+    """The clock reached `Executive.time_limit_ns`: the session must end.
+
+    A `BaseException`, like `KeyboardInterrupt`, so that a mission's `except Exception:`
+    cannot swallow it and loop on forever.
+    """
+
+    def __init__(self, limit_ns: int) -> None:
+        self.limit_ns = limit_ns
+        super().__init__(f"the simulated time limit of {_seconds_text(limit_ns)} was reached")
+
+
+def _seconds_text(ns: int) -> str:
+    seconds = ns / NS_PER_S
+    if seconds >= 3600 and seconds % 3600 == 0:
+        return f"{seconds / 3600:g} h"
+    return f"{seconds:g} s"
+
+
 def _default_vehicle() -> Vehicle:
     from aeroexec.vehicles.sim import SimVehicle
 
@@ -84,6 +103,9 @@ class Executive:
             behavior.bind(self, descriptor)
             self.behaviors[name] = behavior
         self.coordinator = BehaviorCoordinator(self)
+        #: The clock time at which `step()` refuses to go on (`TimeLimitReached`): a
+        #: mission that never ends must not run forever. None: no limit.
+        self.time_limit_ns: int | None = None
         self._feed_beliefs()
         self.initiation = self.bus.call(
             "initiate_behaviors",
@@ -121,6 +143,8 @@ class Executive:
     def step(self) -> None:
         # A tick boundary is a safe point: nothing is half-published or half-recorded.
         check_interrupts()
+        if self.time_limit_ns is not None and self.clock.now_ns() >= self.time_limit_ns:
+            raise TimeLimitReached(self.time_limit_ns)
         self.clock.advance()
         self.vehicle.step(self.clock.tick_ns / NS_PER_S)
         self._feed_beliefs()

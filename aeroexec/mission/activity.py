@@ -1,7 +1,8 @@
 """What the mission did, one row per activation: the run printout and its summary table.
 
 A bus observer, so it sees exactly what the recorder sees: the mission's
-`activate_behavior` calls (accepted or refused) and the `behavior_event`s that end them.
+`activate_behavior` calls (accepted or refused), the `behavior_event`s that end them,
+and the vehicle faults `vehicle/state` reports.
 """
 
 from __future__ import annotations
@@ -56,8 +57,16 @@ def _compact(value: Any) -> str:
 class ActivityLog:
     """Collects `Activation` rows; `on_change(row)` is told as each starts and ends."""
 
-    def __init__(self, on_change: Callable[[Activation], None] | None = None) -> None:
+    def __init__(
+        self,
+        on_change: Callable[[Activation], None] | None = None,
+        on_fault: Callable[[int, str], None] | None = None,
+    ) -> None:
         self.rows: list[Activation] = []
+        #: (clock ns, fault) each time the vehicle's reported fault changed.
+        self.faults: list[tuple[int, str]] = []
+        self._fault = ""
+        self._on_fault = on_fault
         self._by_uid: dict[int, int] = {}
         # A behavior whose on_start fails ends inside its own activate_behavior call,
         # so its event arrives before the (completed) call does.
@@ -85,6 +94,14 @@ class ActivityLog:
             self.on_topic(early)
 
     def on_topic(self, record: TopicRecord) -> None:
+        if record.topic == "vehicle/state":
+            fault = str(record.data.get("fault") or "")
+            if fault != self._fault:
+                self._fault = fault
+                self.faults.append((record.log_time_ns, fault))
+                if self._on_fault is not None:
+                    self._on_fault(record.log_time_ns, fault)
+            return
         if record.topic != "behavior_event":
             return
         uid = int(record.data.get("uid", -1))

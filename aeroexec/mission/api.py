@@ -27,6 +27,7 @@ from aeroexec.executive.beliefs import BeliefSyntaxError
 from aeroexec.executive.clock import NS_PER_S
 from aeroexec.executive.executive import Executive
 from aeroexec.executive.messages import BehaviorEvent
+from aeroexec.interrupts import check as check_interrupts
 
 MODULE_NAME = "executive_engine_api"
 REFUSED = "ERROR"
@@ -46,6 +47,8 @@ class MissionAPI:
         self._ended[event.uid] = event
 
     def _command(self, command: str, **fields: Any) -> None:
+        # A safe point too: a mission polling beliefs in a loop never steps the clock.
+        check_interrupts()
         self.executive.bus.publish("mission/command", {"command": command, **fields})
 
     # -- behaviors -----------------------------------------------------------------------

@@ -12,13 +12,17 @@ from __future__ import annotations
 import contextlib
 import sys
 import traceback
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from enum import Enum
 from pathlib import Path
 from types import CodeType
 from typing import Any
 
-from aeroexec.errors import Mark, MissionError
+from aeroexec.errors import AeroexecError, Mark, MissionError, one_line
+from aeroexec.executive.executive import TimeLimitReached
+from aeroexec.inputs import read_text
+from aeroexec.interrupts import handling as handling_signals
 from aeroexec.mission.api import MODULE_NAME, MissionAPI
 
 ENTRY_POINTS = ("runMission", "run_mission", "main")
@@ -34,32 +38,34 @@ class MissionScript:
     directory: str | None = None
 
 
+class Ending(str, Enum):
+    """How a session's mission ended (recorded as the session's end reason)."""
+
+    RETURNED = "returned"
+    RAISED = "raised"
+    EXITED = "exited"  # the mission called sys.exit()
+    TIME_LIMIT = "max_sim_time"
+
+
 @dataclass(frozen=True, slots=True)
 class MissionOutcome:
-    """How the mission function ended: returned (with its value) or raised."""
+    """How the mission function ended: returned (with its value) or not, and why."""
 
     returned: bool
     value: Any = None
     error: str = ""
     traceback: str = ""
+    ending: Ending = Ending.RETURNED
+    #: `file:line` of the mission's own line where it failed ('' when unknown).
+    where: str = ""
 
 
 def load_mission(path: str | Path) -> MissionScript:
     """Read and compile a mission script; `MissionError` with file:line:col if it can't."""
     file = str(path)
-    p = Path(path)
-    if not p.exists():
-        raise MissionError("no such file", Mark(file))
-    if p.is_dir():
-        raise MissionError("is a directory, not a mission script", Mark(file))
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise MissionError(f"not UTF-8 text (byte {exc.start})", Mark(file)) from None
-    except OSError as exc:
-        raise MissionError(f"cannot read: {exc.strerror}", Mark(file)) from None
+    text = read_text(path, "a mission script", MissionError)
     script = compile_mission(text, file)
-    return MissionScript(script.path, script.text, script.code, str(p.resolve().parent))
+    return MissionScript(script.path, script.text, script.code, str(Path(path).resolve().parent))
 
 
 def compile_mission(text: str, file: str = "<mission>") -> MissionScript:
@@ -70,6 +76,10 @@ def compile_mission(text: str, file: str = "<mission>") -> MissionScript:
         raise MissionError(f"invalid Python: {exc.msg}", mark) from None
     except ValueError as exc:  # e.g. null bytes
         raise MissionError(f"invalid Python: {exc}", Mark(file)) from None
+    except (RecursionError, MemoryError):
+        # CPython's compiler recurses once per level of nesting (5,000 unary minus signs,
+        # `not not ...`, `lambda: lambda: ...`): no mission is written like that.
+        raise MissionError("invalid Python: nested too deeply to compile", Mark(file)) from None
     return MissionScript(file, text, code)
 
 
@@ -84,21 +94,18 @@ def run_script(script: MissionScript, api: MissionAPI) -> MissionOutcome:
     sys.modules[MODULE_NAME] = api.as_module()
     try:
         with _importable(script.directory):
-            try:
-                exec(script.code, namespace)
-            except Exception as exc:
-                return _failed(exc)
+            ended = _run(lambda: exec(script.code, namespace), script)
+            if ended is not None:
+                return ended
             entry = next((namespace[n] for n in ENTRY_POINTS if callable(namespace.get(n))), None)
             if entry is None:
                 raise MissionError(
                     f"defines none of {', '.join(n + '()' for n in ENTRY_POINTS)}",
                     Mark(script.path),
                 )
-            try:
-                value = entry()
-            except Exception as exc:
-                return _failed(exc)
-            return MissionOutcome(True, value)
+            result: list[Any] = []
+            ended = _run(lambda: result.append(entry()), script)
+            return ended if ended is not None else MissionOutcome(True, result[0])
     finally:
         if previous is None:
             sys.modules.pop(MODULE_NAME, None)
@@ -127,6 +134,63 @@ def _importable(directory: str | None) -> Iterator[None]:
                 del sys.modules[name]
 
 
-def _failed(exc: Exception) -> MissionOutcome:
-    message = exc.message if isinstance(exc, MissionError) else f"{type(exc).__name__}: {exc}"
-    return MissionOutcome(False, None, message, traceback.format_exc())
+def _run(step: Callable[[], object], script: MissionScript) -> MissionOutcome | None:
+    """Run one part of the mission; None if it went through, else how the mission ended.
+
+    Whatever the mission raises or calls is the mission's ending, not aeroexec's:
+    `sys.exit(7)` ends the mission (a failure unless the code is 0), and so does a
+    `KeyboardInterrupt` the mission raises itself. A real Ctrl-C is not one of those:
+    while signals are handled (`aeroexec.interrupts`) it arrives as `Interrupted`,
+    which passes through like the executive's `TimeLimitReached` and aeroexec's own
+    input/output errors (the recorder's, say) other than `MissionError`.
+    """
+    try:
+        step()
+    except TimeLimitReached as exc:
+        return MissionOutcome(
+            False, None, str(exc), traceback.format_exc(), Ending.TIME_LIMIT, _where(exc, script)
+        )
+    except SystemExit as exc:
+        where = _where(exc, script)
+        if exc.code is None or exc.code == 0:
+            return MissionOutcome(True, None, ending=Ending.EXITED, where=where)
+        return MissionOutcome(
+            False,
+            None,
+            f"the mission called sys.exit({exc.code!r})",
+            traceback.format_exc(),
+            Ending.EXITED,
+            where,
+        )
+    except KeyboardInterrupt as exc:
+        if not handling_signals():
+            raise  # possibly the user's Ctrl-C: not ours to swallow
+        return _failed(exc, script)
+    except AeroexecError as exc:
+        if not isinstance(exc, MissionError):
+            raise
+        return _failed(exc, script)
+    except Exception as exc:
+        return _failed(exc, script)
+    return None
+
+
+def _failed(exc: BaseException, script: MissionScript) -> MissionOutcome:
+    if isinstance(exc, MissionError):
+        message = exc.message
+    else:
+        message = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+    return MissionOutcome(
+        False, None, one_line(message), traceback.format_exc(), Ending.RAISED, _where(exc, script)
+    )
+
+
+def _where(exc: BaseException, script: MissionScript) -> str:
+    """`file:line` of the innermost frame of the mission script in the traceback."""
+    line = 0
+    for frame in traceback.extract_tb(exc.__traceback__):
+        if frame.filename == script.path and frame.lineno:
+            line = frame.lineno
+    if line == 0 and isinstance(exc, SyntaxError) and exc.filename == script.path:
+        line = exc.lineno or 0
+    return f"{script.path}:{line}" if line else ""

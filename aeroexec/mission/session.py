@@ -7,7 +7,8 @@ checkable.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -18,20 +19,26 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import SimClock
+from aeroexec.executive.clock import NS_PER_S, SimClock
 from aeroexec.executive.executive import Executive
+from aeroexec.inputs import read_text
+from aeroexec.interrupts import Interrupted
 from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.plugins.discovery import STAND_IN, BehaviorSet, standard_set
 from aeroexec.plugins.manifest import METADATA_NAME as CODE_RECORD
 from aeroexec.plugins.manifest import code_manifest
-from aeroexec.vehicles.base import VehicleState
+from aeroexec.vehicles.base import Vehicle, VehicleState
 from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
     from aeroexec.vehicles.world import World
+
+
+#: A mission that never ends is stopped after one simulated day.
+DEFAULT_MAX_SIM_TIME_S = 24 * 3600.0
 
 
 @dataclass(frozen=True)
@@ -46,6 +53,8 @@ class SessionConfig:
     behaviors: BehaviorSet | None = None
     #: Run catalog behaviors without an implementation as announced stand-ins.
     allow_unimplemented: bool = False
+    #: The session ends when the simulated clock reaches this (None: never).
+    max_sim_time_s: float | None = DEFAULT_MAX_SIM_TIME_S
 
 
 @dataclass(frozen=True)
@@ -56,18 +65,22 @@ class SessionResult:
     final_state: VehicleState
     recording: str | None = None
     metadata: dict[str, str] = field(default_factory=dict)
+    #: (clock ns, fault) each time the vehicle's fault changed ('' when it cleared).
+    faults: tuple[tuple[int, str], ...] = ()
+
+    @property
+    def vehicle_lost(self) -> str:
+        """The fault the vehicle ended the session with ('' when it ended healthy)."""
+        return self.final_state.fault
 
 
 def _world_text(world_path: str | Path | None) -> tuple[str, str]:
     """The world file's text and the name to show: recorded so replay can rebuild it."""
-    from aeroexec.errors import Mark, WorldError
+    from aeroexec.errors import WorldError
     from aeroexec.vehicles.world import DEFAULT_WORLD
 
     path = Path(world_path) if world_path is not None else DEFAULT_WORLD
-    try:
-        return path.read_text(encoding="utf-8"), str(path)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise WorldError(f"cannot read world file: {exc}", Mark(str(path))) from None
+    return read_text(path, "a world file", WorldError), str(path)
 
 
 def _build_vehicle(world_text: str, world_file: str, seed: int) -> SimVehicle:
@@ -196,7 +209,7 @@ def simulate(
         code.records,
         vehicle.world,
     )
-    try:
+    with recording_session(recorder, vehicle):
         executive = Executive(
             catalog,
             vehicle=vehicle,
@@ -205,10 +218,11 @@ def simulate(
             observers=all_observers,
             drone=config.drone,
         )
+        if config.max_sim_time_s is not None:
+            executive.time_limit_ns = round(config.max_sim_time_s * NS_PER_S)
         outcome = run_script(script, MissionAPI(executive))
-    finally:
         if recorder is not None:
-            recorder.close()
+            end_recording(recorder, outcome.ending.value, outcome.error, vehicle.state().fault)
     return SessionResult(
         outcome=outcome,
         activations=tuple(activity.rows),
@@ -216,4 +230,35 @@ def simulate(
         final_state=vehicle.state(),
         recording=str(config.record) if config.record is not None else None,
         metadata=metadata,
+        faults=tuple(activity.faults),
     )
+
+
+@contextmanager
+def recording_session(recorder: Recorder | None, vehicle: Vehicle | None = None) -> Iterator[None]:
+    """The block a recorded session runs in: on a signal the recording gets its end
+    record ("interrupted") and its footer, and the `Interrupted` says so; however the
+    block ends, the recorder is closed."""
+    try:
+        yield
+    except Interrupted as stop:
+        if recorder is not None and not recorder.closed:
+            fault = vehicle.state().fault if vehicle is not None else ""
+            end_recording(recorder, "interrupted", stop.name, fault)
+            stop.notes.append(finalized_note(recorder))
+        raise
+    finally:
+        if recorder is not None and not recorder.closed:
+            recorder.close()
+
+
+def finalized_note(recorder: Recorder) -> str:
+    """What an interrupted command says about its recording."""
+    return f"recording finalized: {recorder.path} ({recorder.messages_written} messages, complete)"
+
+
+def end_recording(recorder: Recorder, reason: str, detail: str, fault: str) -> None:
+    """Write why the session ended (`aeroexec_end`), then the footer."""
+    facts = {"vehicle_fault": fault} if fault else {}
+    recorder.end_session(reason, detail, **facts)
+    recorder.close()

@@ -13,12 +13,15 @@ import os
 from dataclasses import dataclass, field
 from typing import Any
 
+from aeroexec.recording.damage import Damage
 from aeroexec.recording.reader import ChannelInfo, RawMessage, RecordedAttachment, Recording
 from aeroexec.recording.schemas import MESSAGE_ENCODING
 
 #: The metadata record saying which code implemented each behavior (see
 #: `aeroexec.plugins.manifest`; named here so reading a recording imports no plugin code).
 CODE_RECORD = "behaviors"
+#: The metadata record `aeroexec recover` adds to a copy of a damaged file.
+RECOVER_METADATA_NAME = "aeroexec_recover"
 
 _NS = 1_000_000_000
 
@@ -73,6 +76,12 @@ class InfoReport:
     attachments: tuple[tuple[str, str, int], ...]
     behaviors: tuple[BehaviorRun, ...]
     notes: tuple[str, ...] = field(default=())
+    #: Damaged regions stepped over (zero-filled, garbage, CRC mismatches).
+    damages: tuple[Damage, ...] = ()
+    #: What the file's statistics promise (None: no summary), and how many were read.
+    expected_messages: int | None = None
+    #: Why reading stopped before the footer (None: the footer was read).
+    cut: str | None = None
 
     @property
     def duration_ns(self) -> int:
@@ -114,6 +123,8 @@ class InfoReport:
             ],
             "behaviors": [b.as_dict() for b in self.behaviors],
             "notes": list(self.notes),
+            "damages": [d.as_dict() for d in self.damages],
+            "expected_messages": self.expected_messages,
         }
 
     def to_json(self) -> str:
@@ -126,6 +137,14 @@ class InfoReport:
         ]
         if self.complete:
             lines.append("complete:    yes")
+        elif self.damages:
+            regions = f"{len(self.damages)} damaged region{'s' if len(self.damages) > 1 else ''}"
+            if self.expected_messages is not None:
+                regions += f", {self.messages} of the {self.expected_messages} messages read"
+            if self.cut:
+                regions += f"; {self.cut}"
+            lines.append(f"complete:    NO: {regions} (try `aeroexec recover`)")
+            lines.extend(f"damage:      {d.describe()}" for d in self.damages)
         else:
             lines.append(f"complete:    NO: {self.problem} (try `aeroexec recover`)")
         span = ""
@@ -284,6 +303,14 @@ def recording_info(path: str | os.PathLike[str]) -> InfoReport:
     notes = list(recording.notes)
     if undecodable:
         notes.append(f"{undecodable} behavior message(s) were not valid JSON")
+    recovered = metadata.get(RECOVER_METADATA_NAME)
+    if recovered is not None and recovered.get("damaged_regions", "0") != "0":
+        copied, expected = recovered.get("messages_copied"), recovered.get("messages_expected")
+        of = f" ({copied} of {expected} messages)" if copied and expected else ""
+        notes.append(
+            f"recovered from a damaged {recovered.get('source', 'recording')}{of}: "
+            f"not the whole session (metadata {RECOVER_METADATA_NAME} says what is missing)"
+        )
     if not aeroexec:
         notes.append(
             f"profile {recording.profile or '(none)'!r} is not aeroexec: counts only, "
@@ -306,4 +333,7 @@ def recording_info(path: str | os.PathLike[str]) -> InfoReport:
         attachments=tuple(attachments),
         behaviors=outcomes.runs(),
         notes=tuple(notes),
+        damages=scan_end.damages,
+        expected_messages=scan_end.expected_messages,
+        cut=scan_end.cut,
     )

@@ -144,6 +144,7 @@ class Recording:
         self.notes: list[str] = []
         self._survey: Survey | None = None
         self._end: ScanEnd | None = None
+        self._summary: tuple[dict[int, Schema], dict[int, Channel]] | None = None
 
     @property
     def is_aeroexec(self) -> bool:
@@ -296,6 +297,12 @@ class Recording:
         return Survey(channels, counts, metadata, tuple(attachments), first, last, self._end)
 
     def _unknown_channel(self, channel_id: int) -> ChannelInfo:
+        if self._summary is None:
+            self._summary = self._scanner.summary_definitions()
+        schemas, channels = self._summary
+        channel = channels.get(channel_id)
+        if channel is not None:  # its definition was lost with a damaged chunk
+            return _channel_info(channel, schemas.get(channel.schema_id))
         self.notes.append(f"messages on channel {channel_id}, which the file never defines")
         return ChannelInfo(channel_id, f"<channel {channel_id}>", "", "", "", b"")
 

@@ -4,11 +4,14 @@
 
 Reads the source record by record (`RecordScanner`: no footer or summary needed) and
 writes every schema, channel, message, attachment and metadata record it can read, in
-the same order, to a new file with a proper summary and footer. The output is written
+the same order, to a new file with a proper summary and footer. Damaged regions of the
+source (zero-filled, garbage, CRC mismatches) are stepped over; the copy then carries an
+`aeroexec_recover` metadata record saying what is missing where, so it cannot pass for
+the whole recording. The output is written
 to a temporary name beside the target and renamed into place only when complete, so a
-failed recovery never leaves a half-written target. Channel and schema ids are renumbered
-in order of appearance (identical to the source's for aeroexec files). Memory stays flat:
-one chunk at a time.
+failed or interrupted recovery never leaves a half-written target. Channel and schema ids
+are renumbered in order of appearance (identical to the source's for aeroexec files).
+Memory stays flat: one chunk at a time.
 """
 
 from __future__ import annotations
@@ -21,12 +24,16 @@ from mcap.records import Metadata
 from mcap.writer import CompressionType, Writer
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.outputs import whole_file_or_none
+from aeroexec.recording.damage import Damage
+from aeroexec.recording.info import RECOVER_METADATA_NAME
 from aeroexec.recording.reader import (
     ChannelInfo,
     RawMessage,
     RecordedAttachment,
     Recording,
 )
+from aeroexec.recording.scan import ScanEnd
 
 
 @dataclass(frozen=True, slots=True)
@@ -37,18 +44,31 @@ class RecoverReport:
     channels: int
     attachments: int
     metadata: int
-    #: The source already had its footer (recovery just rewrote it).
+    #: The source was whole: footer read, nothing damaged (recovery just rewrote it).
     source_complete: bool
     #: Where reading the source stopped, and why (None when it was complete).
     stopped_at: int
     problem: str | None
+    #: Damaged regions of the source stepped over: what the copy is missing, and where.
+    damages: tuple[Damage, ...] = ()
+    #: What the source's statistics promised (None: it had no summary).
+    expected_messages: int | None = None
+    #: Why reading stopped before the footer (None: the footer was read).
+    cut: str | None = None
 
     def summary(self) -> str:
-        state = (
-            "source was complete"
-            if self.source_complete
-            else f"source incomplete, read up to byte {self.stopped_at}"
-        )
+        if self.source_complete:
+            state = "source was complete"
+        else:
+            parts = []
+            if self.damages:
+                regions = len(self.damages)
+                parts.append(f"source damaged: {regions} region{'s' if regions > 1 else ''} lost")
+                if self.expected_messages is not None:
+                    parts.append(f"{self.messages} of its {self.expected_messages} messages copied")
+            if self.cut is not None:
+                parts.append(f"source incomplete, read up to byte {self.stopped_at}")
+            state = "; ".join(parts) or f"source incomplete: {self.problem}"
         return (
             f"{self.target}: recovered {self.messages} messages on {self.channels} channels, "
             f"{self.attachments} attachments, {self.metadata} metadata records ({state})"
@@ -62,13 +82,8 @@ def recover(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> R
         raise RecordingError("the output must be a different file", Mark(str(target)))
     if target_path.is_dir():
         raise RecordingError("is a directory", Mark(str(target)))
-    temp = target_path.with_name(f".{target_path.name}.recovering")
-    try:
-        stream = open(temp, "wb")  # noqa: SIM115 (closed below)
-    except OSError as exc:
-        raise RecordingError(f"cannot write: {exc.strerror or exc}", Mark(str(target))) from None
     counts = {"messages": 0, "channels": 0, "attachments": 0, "metadata": 0}
-    try:
+    with whole_file_or_none(target_path) as temp, open(temp, "wb") as stream:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile=recording.profile, library=recording.library)
         schemas: dict[tuple[str, str, bytes], int] = {}
@@ -98,18 +113,12 @@ def recover(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> R
             elif isinstance(item, Metadata):
                 writer.add_metadata(item.name, dict(item.metadata))
                 counts["metadata"] += 1
+        end = recording.end
+        if not end.complete:
+            # The copy is complete as a file, not as a recording: it says what it lacks.
+            writer.add_metadata(RECOVER_METADATA_NAME, _what_is_missing(recording.name, end))
         writer.finish()
-        stream.close()
-        os.replace(temp, target_path)
-    except OSError as exc:
-        stream.close()
-        temp.unlink(missing_ok=True)
-        raise RecordingError(f"cannot write: {exc.strerror or exc}", Mark(str(target))) from None
-    except BaseException:
-        stream.close()
-        temp.unlink(missing_ok=True)
-        raise
-    end = recording.end
+        stream.flush()  # a full disk is an error here, inside the block
     return RecoverReport(
         source=recording.name,
         target=str(target),
@@ -120,7 +129,25 @@ def recover(source: str | os.PathLike[str], target: str | os.PathLike[str]) -> R
         source_complete=end.complete,
         stopped_at=end.offset,
         problem=end.problem,
+        damages=end.damages,
+        expected_messages=end.expected_messages,
+        cut=end.cut,
     )
+
+
+def _what_is_missing(source: str, end: ScanEnd) -> dict[str, str]:
+    """The `aeroexec_recover` metadata: the source, and each part of it not copied."""
+    values = {
+        "source": Path(source).name,
+        "messages_copied": str(end.messages_read),
+        "messages_expected": "" if end.expected_messages is None else str(end.expected_messages),
+        "damaged_regions": str(len(end.damages)),
+    }
+    for number, damage in enumerate(end.damages, 1):
+        values[f"damage_{number}"] = damage.describe()
+    if end.cut is not None:
+        values["cut"] = end.cut
+    return values
 
 
 def _register(

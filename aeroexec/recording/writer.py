@@ -37,20 +37,22 @@ the kernel, not necessarily the disk: a power cut is not covered (no fsync per c
 from __future__ import annotations
 
 import atexit
+import contextlib
 import json
 import math
 import os
+import stat
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, is_dataclass
 from enum import Enum
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 from mcap.writer import CompressionType, Writer
 from mcap.writer import __version__ as MCAP_VERSION
 
 from aeroexec import __version__
-from aeroexec.errors import Mark, RecordingError
+from aeroexec.errors import Mark, OutputLost, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.recording.foxglove import (
     call_log_message,
@@ -80,6 +82,8 @@ FLUSH_MESSAGES = 100
 FLUSH_INTERVAL_NS = 500_000_000
 #: The metadata record's name.
 METADATA_NAME = "aeroexec"
+#: The metadata record written when a session ends (`Recorder.end_session`).
+END_METADATA_NAME = "aeroexec_end"
 LIBRARY = f"aeroexec/{__version__} mcap-python/{MCAP_VERSION}"
 
 _COMPRESSIONS = {
@@ -245,6 +249,13 @@ class Recorder:
             self._stream: IO[bytes] = open(self.path, "wb")  # noqa: SIM115 (closed by close())
         except OSError as exc:
             raise RecordingError(f"cannot write: {exc.strerror or exc}", Mark(str(path))) from None
+        #: What is safely in the file: the offset after the last flush, and the messages
+        #: and clock time up to it. A failed write truncates the file back to it.
+        self._lost = False
+        self._good_offset = 0
+        self._good_messages = 0
+        self._good_until_ns: int | None = None
+        self._last_ns: int | None = None
         self._writer = Writer(
             self._stream,
             chunk_size=4 * 1024 * 1024,
@@ -272,6 +283,8 @@ class Recorder:
             self._guard(
                 self._start, dict(metadata or {}), dict(attachments or {}), dict(records or {})
             )
+        except OutputLost as lost:
+            raise lost.error from None  # nothing written yet: a plain "cannot write"
         except BaseException:
             self._closed = True
             self._stream.close()
@@ -331,18 +344,34 @@ class Recorder:
         self._guard(self._writer.flush)
         self._pending = 0
         self._flushed = self._count
+        self._mark_good()
+
+    def end_session(self, reason: str, detail: str = "", **facts: str) -> None:
+        """Record why the session ended: the metadata record `aeroexec_end`
+        (`reason`, `detail`, the clock time of the last message and any `facts`),
+        written after every message so far. A file killed before its end has none."""
+        self.flush()
+        values = {
+            "reason": reason,
+            "detail": detail,
+            "time_ns": str(self._last_ns or 0),
+            **{k: str(v) for k, v in facts.items()},
+        }
+        self._guard(self._writer.add_metadata, END_METADATA_NAME, values)
+        self._mark_good()
 
     def close(self) -> None:
-        """Flush, write the summary and footer, close the file. Idempotent."""
+        """Flush, write the summary and footer, close the file. Idempotent.
+
+        On a write error (a full disk) the file is cut back to its last flush, which
+        stays readable without a footer, and `OutputLost` says so."""
         if self._closed:
             return
+        self._guard(self._finish)
         self._closed = True
         atexit.unregister(self.close)
-        try:
-            self._guard(self._writer.finish)
-            self._flushed = self._count
-        finally:
-            self._stream.close()
+        self._stream.close()
+        self._flushed = self._count
 
     def __enter__(self) -> Recorder:
         return self
@@ -397,8 +426,11 @@ class Recorder:
                 create_time=0, log_time=0, name=name, media_type=_media_type(name), data=data
             )
         self._stream.flush()
+        self._mark_good()
 
     def _channel(self, topic: str, schema_name: str) -> int:
+        if self._lost:
+            return 0
         self._check_open()
         schema = self._schemas.get(schema_name)
         if schema is None:
@@ -413,6 +445,8 @@ class Recorder:
 
     def _write(self, channel: int, log_time_ns: int, data: bytes) -> None:
         if self._closed:
+            if self._lost:
+                return  # already reported (OutputLost); the session is unwinding
             self._check_open()
         if not self._pending:
             self._pending_since = log_time_ns
@@ -420,16 +454,19 @@ class Recorder:
             # (channel_id, log_time, data, publish_time, sequence); sequence is a uint32
             self._add(channel, log_time_ns, data, log_time_ns, self._count & 0xFFFFFFFF)
         except OSError as exc:
-            raise RecordingError(
-                f"cannot write: {exc.strerror or exc}", Mark(str(self.path))
-            ) from None
+            self._lose(exc)
         self._count += 1
+        self._last_ns = log_time_ns
         self._pending += 1
         if (
             self._pending >= self.flush_messages
             or log_time_ns - self._pending_since >= self.flush_interval_ns
         ):
             self.flush()
+
+    def _finish(self) -> None:
+        self._writer.finish()
+        self._stream.flush()  # here, where a full disk is caught, not in close()
 
     def _check_open(self) -> None:
         if self._closed:
@@ -439,6 +476,51 @@ class Recorder:
         try:
             action(*args)
         except OSError as exc:
-            raise RecordingError(
-                f"cannot write: {exc.strerror or exc}", Mark(str(self.path))
-            ) from None
+            self._lose(exc)
+
+    def _mark_good(self) -> None:
+        try:
+            self._good_offset = self._stream.tell()
+        except OSError:  # not seekable (a pipe): nothing to cut back to
+            return
+        self._good_messages = self._count
+        self._good_until_ns = self._last_ns
+
+    def _lose(self, exc: OSError) -> NoReturn:
+        """A write failed: stop writing, keep what is safely on disk, say what."""
+        self._lost = True
+        if not self._closed:
+            self._closed = True
+            atexit.unregister(self.close)
+        with contextlib.suppress(OSError):  # flushing the buffer fails again: drop it
+            self._stream.close()
+        kept = self._salvage()
+        raise OutputLost(
+            RecordingError(f"cannot write: {exc.strerror or exc}; {kept}", Mark(str(self.path)))
+        ) from None
+
+    def _salvage(self) -> str:
+        """Cut the file back to its last flush (or remove it if that holds no message)."""
+        try:
+            regular = stat.S_ISREG(os.stat(self.path).st_mode)
+        except OSError:
+            return "nothing was kept"
+        if not regular:  # /dev/full, a pipe: nothing to keep or remove
+            return "nothing was kept"
+        if self._good_messages == 0:
+            with contextlib.suppress(OSError):
+                os.unlink(self.path)
+            return "no message had been written: the partial file was removed"
+        try:
+            os.truncate(self.path, self._good_offset)
+        except OSError as exc:
+            return (
+                f"the first {self._good_messages} messages are in the file, followed by "
+                f"a partial chunk ({exc.strerror or exc} cutting it off); "
+                "`aeroexec recover` reads up to it"
+            )
+        until = (self._good_until_ns or 0) / _NS
+        return (
+            f"kept the first {self._good_messages} messages (to {until:.1f} s), readable "
+            "without a footer (`aeroexec recover` makes a complete copy)"
+        )

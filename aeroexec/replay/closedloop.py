@@ -7,9 +7,12 @@ function `aeroexec run` uses — so with the recorded catalog and unchanged code
 is the same session again, message for message and, when recorded with the same
 settings, byte for byte.
 
-A recording without a script attachment is replayed from its `mission/command` stream
-instead (`CommandPlayer`, commands at their recorded times, each waiting for the end of
-a previous `execute_behavior` as the script did).
+The script is code, and a recording is data a user may have received from anyone: the
+stored script runs only with `--trust-recording`. With `--mission PATH` the user's own
+copy runs instead (noted when it differs from the stored one). With neither, or for a
+recording without a script, the `mission/command` stream is replayed (`CommandPlayer`,
+commands at their recorded times, each waiting for the end of a previous
+`execute_behavior` as the script did): the same commands, no code from the file.
 """
 
 from __future__ import annotations
@@ -23,9 +26,11 @@ from aeroexec import __version__
 from aeroexec.catalog.model import Catalog
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
-from aeroexec.mission.script import compile_mission
+from aeroexec.mission.script import MissionScript, compile_mission
 from aeroexec.mission.session import (
     SessionConfig,
+    end_recording,
+    recording_session,
     session_code,
     session_observers,
     simulate,
@@ -73,15 +78,53 @@ def _world(run: RecordedRun, notes: list[str]) -> tuple[str, str]:
     return text, name
 
 
+#: Why closed loop did not run the script stored in a recording.
+UNTRUSTED = (
+    "the recording's mission.py was not run (--trust-recording runs it, --mission FILE "
+    "runs yours): replayed the recorded mission commands"
+)
+
+
+def _script_to_run(
+    run: RecordedRun, mission: MissionScript | None, trust_recording: bool, notes: list[str]
+) -> MissionScript | None:
+    """The mission script closed loop runs, or None to replay the command stream.
+
+    A recording is data anyone may send: the script stored in it is run only when the
+    user says so (`trust_recording`); otherwise the user's own script (`mission`) runs,
+    or, without one, the recorded commands are replayed and no code from the file is."""
+    recorded = run.text("mission.py")
+    if mission is not None:
+        if recorded is None:
+            notes.append(f"ran {mission.path}; the recording has no mission.py to compare with")
+        elif recorded != mission.text:
+            notes.append(f"ran {mission.path}, which differs from the recording's mission.py")
+        return mission
+    if recorded is None:
+        notes.append("no mission.py attachment: replayed the recorded mission/command stream")
+        return None
+    if not trust_recording:
+        notes.append(UNTRUSTED)
+        return None
+    return compile_mission(recorded, run.metadata.get("mission") or "mission.py")
+
+
 def replay_closed(
     run: RecordedRun,
     catalog: ChosenCatalog,
     behaviors: BehaviorSet,
     output: str | Path | None,
     horizon_ns: int | None,
+    *,
+    mission: MissionScript | None = None,
+    trust_recording: bool = False,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` in the simulator with `behaviors` (complete for the catalog, stand-ins
-    included); the replay's outcome and notes about how."""
+    included); the replay's outcome and notes about how.
+
+    `mission`: the script to run (the user's copy); `trust_recording`: without one, run
+    the script stored in the recording. Neither: the recorded command stream is replayed
+    and no code from the recording runs."""
     notes: list[str] = []
     metadata = run.metadata
     seed = _seed(metadata, notes)
@@ -89,12 +132,10 @@ def replay_closed(
     drone = metadata.get("drone") or "drone1"
     builder = OutcomeBuilder(horizon_ns)
     observer = OutcomeObserver(builder)
-    script_text = run.text("mission.py")
-    if script_text is None:
-        notes.append("no mission.py attachment: replayed the recorded mission/command stream")
+    script = _script_to_run(run, mission, trust_recording, notes)
+    if script is None:
         _replay_commands(run, catalog, behaviors, output, world, seed, drone, observer)
     else:
-        script = compile_mission(script_text, metadata.get("mission") or "mission.py")
         world_name = world[1]
         config = SessionConfig(
             mission=script.path,
@@ -115,7 +156,8 @@ def replay_closed(
                 world=world,
             )
         if not result.outcome.returned:
-            notes.append(f"the replayed mission raised: {result.outcome.error}")
+            where = f" at {result.outcome.where}" if result.outcome.where else ""
+            notes.append(f"the replayed mission raised{where}: {result.outcome.error}")
     outcome = builder.outcome(f"{run.outcome.source} (replay)", metadata=dict(metadata))
     return outcome, tuple(notes)
 
@@ -152,7 +194,7 @@ def _replay_commands(
     _, observers, recorder = session_observers(
         output, drone, metadata, attachments, [observer], code.records, vehicle.world
     )
-    try:
+    with recording_session(recorder, vehicle):
         executive = Executive(
             catalog.catalog,
             vehicle=vehicle,
@@ -163,6 +205,6 @@ def _replay_commands(
         )
         player = CommandPlayer(executive, offset_ns=offset, wait_for_execute=True)
         player.play(run.outcome.commands, until_ns=run.outcome.end_ns)
-    finally:
         if recorder is not None:
-            recorder.close()
+            reason = "the recorded commands were replayed"
+            end_recording(recorder, "returned", reason, vehicle.state().fault)

@@ -245,6 +245,7 @@ class OutcomeBuilder:
         problem: str | None = None,
         metadata: dict[str, str] | None = None,
         notes: tuple[str, ...] = (),
+        intact_until_ns: int | None = None,
     ) -> RunOutcome:
         final = None
         if self._state is not None:
@@ -265,6 +266,7 @@ class OutcomeBuilder:
             metadata=dict(metadata or {}),
             notes=notes,
             observed=frozenset(self._observed),
+            intact_until_ns=intact_until_ns,
         )
 
     # -- internals ---------------------------------------------------------------------
@@ -406,6 +408,8 @@ def read_run(
         problem=summary.problem,
         metadata=metadata,
         notes=tuple(notes),
+        # Damaged before its first message: nothing of it can be compared.
+        intact_until_ns=(summary.intact_until_ns or 0) if summary.damages else None,
     )
     code = summary.metadata.get(CODE_RECORD, {})
     return RecordedRun(outcome, metadata, dict(summary.attachments), source.profile, code)

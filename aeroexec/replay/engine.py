@@ -15,15 +15,17 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
 from typing import Any
 
+from aeroexec import interrupts
 from aeroexec.bags.bagfile import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
@@ -31,6 +33,7 @@ from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S
+from aeroexec.replay.workers import completed_or_interrupted
 
 
 class Mode(str, Enum):
@@ -50,6 +53,11 @@ class ReplayOptions:
     #: Where the behaviors come from (default: the standard library only). Plain data,
     #: so each worker process discovers the same set.
     behaviors: BehaviorSources | None = None
+    #: Closed loop: run this mission script (the user's copy of the recorded one).
+    mission: str | None = None
+    #: Closed loop without `mission`: run the script stored in the recording (code from
+    #: a file the user may have received from anyone: never by default).
+    trust_recording: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -123,7 +131,16 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     run = read_run(path)
     notes: list[str] = []
     horizon = None
-    if not run.outcome.complete:
+    if run.outcome.intact_until_ns is not None:
+        # Damaged in the middle: what follows the first damage may lack what was lost
+        # there, so both runs are compared only before it.
+        horizon = run.outcome.intact_until_ns
+        run = read_run(path, horizon)
+        notes.append(
+            f"damaged recording ({run.outcome.problem}): compared the first "
+            f"{horizon / NS_PER_S:.1f} s ({_commands(len(run.outcome.commands))}) only"
+        )
+    elif not run.outcome.complete:
         # Compare both runs up to (not including) the last instant the file holds: the
         # messages of that instant may be only partly there.
         horizon = run.outcome.end_ns
@@ -137,7 +154,16 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     catalog = choose_catalog(run, options.catalog)
     behaviors = choose_behaviors(run, catalog, options.behaviors)
     if mode is Mode.closed:
-        replayed, how = replay_closed(run, catalog, behaviors, options.output, horizon)
+        mission = load_mission(options.mission) if options.mission is not None else None
+        replayed, how = replay_closed(
+            run,
+            catalog,
+            behaviors,
+            options.output,
+            horizon,
+            mission=mission,
+            trust_recording=options.trust_recording,
+        )
     else:
         replayed, how = replay_open(path, run, catalog, behaviors, options.output, horizon)
     notes.extend(how)
@@ -184,6 +210,10 @@ def choose_behaviors(
     return found.for_catalog(catalog.catalog)
 
 
+def _commands(count: int) -> str:
+    return f"{count} command{'s' if count != 1 else ''}"
+
+
 def replay_file(path: str, options: ReplayOptions) -> ReplayResult:
     """`replay_recording`, with input problems as a result (for batches and workers),
     and the time it took."""
@@ -228,10 +258,12 @@ def replay_many(
                 on_done(result)
             results.append(result)
         return results
-    with ProcessPoolExecutor(max_workers=min(jobs, len(paths))) as pool:
+    with ProcessPoolExecutor(
+        max_workers=min(jobs, len(paths)), initializer=interrupts.in_worker_process
+    ) as pool:
         futures = [pool.submit(replay_file, p, o) for p, o in zip(paths, per_path, strict=True)]
-        if on_done is not None:
-            for future in as_completed(futures):
+        for future in completed_or_interrupted(pool, futures):
+            if on_done is not None:
                 on_done(future.result())
         return [future.result() for future in futures]
 
@@ -244,12 +276,23 @@ def diff_recordings(
     """What changed from the recording `base` to the recording `new`. A recording cut
     short limits the comparison to the time both files cover."""
     runs = [read_run(base), read_run(new)]
-    cuts = [r.outcome.end_ns for r in runs if not r.outcome.complete and r.outcome.end_ns]
+    limits: list[int] = []
+    why: list[str] = []
+    for path, run in zip((base, new), runs, strict=True):
+        outcome = run.outcome
+        if outcome.intact_until_ns is not None:
+            limits.append(outcome.intact_until_ns)
+            why.append(f"{path} is damaged ({outcome.problem})")
+        elif not outcome.complete and outcome.end_ns:
+            limits.append(outcome.end_ns)
+            why.append(f"{path} is incomplete ({outcome.problem})")
     notes: tuple[str, ...] = ()
-    if cuts:
-        horizon = min(cuts)
+    if limits:
+        # Both runs are cut at the same instant, so neither is compared with the other
+        # at a different time (the final state of one against a later one of the other).
+        horizon = min(limits)
         runs = [read_run(base, horizon), read_run(new, horizon)]
-        notes = (f"a recording is incomplete: compared the first {horizon / NS_PER_S:.1f} s only",)
+        notes = (f"{'; '.join(why)}: compared both on their first {horizon / NS_PER_S:.1f} s only",)
     return diff_outcomes(
         runs[0].outcome,
         runs[1].outcome,

@@ -16,7 +16,7 @@ from pathlib import Path
 from aeroexec import __version__
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
-from aeroexec.mission.session import session_observers
+from aeroexec.mission.session import end_recording, recording_session, session_observers
 from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.replay.closedloop import ChosenCatalog
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
@@ -65,20 +65,21 @@ def replay_open(
         [OutcomeObserver(builder, offset_ns=offset)],
     )
     try:
-        executive = Executive(
-            catalog.catalog,
-            vehicle=vehicle,
-            clock=clock,
-            library=stand_in_library(catalog.catalog, script, behaviors.library()),
-            observers=observers,
-            drone=drone,
-        )
-        player = CommandPlayer(executive, offset_ns=offset, arm=script.arm)
-        player.play(recorded.commands, until_ns=recorded.end_ns)
+        with recording_session(recorder):
+            executive = Executive(
+                catalog.catalog,
+                vehicle=vehicle,
+                clock=clock,
+                library=stand_in_library(catalog.catalog, script, behaviors.library()),
+                observers=observers,
+                drone=drone,
+            )
+            player = CommandPlayer(executive, offset_ns=offset, arm=script.arm)
+            player.play(recorded.commands, until_ns=recorded.end_ns)
+            if recorder is not None:
+                end_recording(recorder, "returned", "the recorded commands were replayed", "")
     finally:
         states.close()
-        if recorder is not None:
-            recorder.close()
     if offset:
         notes.append(f"recorded times start at {offset / 1e9:.3f} s: the replay starts there")
     outcome = builder.outcome(f"{recorded.source} (open-loop replay)", metadata=dict(run.metadata))

@@ -123,6 +123,9 @@ class RunOutcome:
     #: Which transitions the run recorded at all ("capabilities", "processes"): a ROS bag
     #: may carry neither, and what was not recorded cannot be compared.
     observed: frozenset[str] = frozenset({"capabilities", "processes"})
+    #: A damaged recording is intact only before this log time (None: not damaged):
+    #: comparisons stop there, so that a lost message is not taken for a change.
+    intact_until_ns: int | None = None
 
     @property
     def duration_s(self) -> float:

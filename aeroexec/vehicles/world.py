@@ -16,6 +16,7 @@ from typing import Any
 
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import CatalogError, Mark, WorldError
+from aeroexec.inputs import read_text
 from aeroexec.vehicles.base import Vec3
 
 WORLDS_DIR = Path(__file__).resolve().parent.parent / "data" / "worlds"
@@ -375,14 +376,7 @@ def _random_failure(r: _Reader, node: YNode) -> RandomFailure:
 
 def load_world(path: str | Path) -> World:
     """Read a world file; unreadable files are a `WorldError` too."""
-    file = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise WorldError(f"not UTF-8 text ({exc.reason})", Mark(file)) from None
-    except OSError as exc:
-        raise WorldError(f"cannot read world file: {exc.strerror or exc}", Mark(file)) from None
-    return parse_world(text, file)
+    return parse_world(read_text(path, "a world file", WorldError), str(path))
 
 
 @lru_cache(maxsize=1)

@@ -22,6 +22,7 @@ from typing import Any
 from aeroexec.catalog.arguments import check_value
 from aeroexec.catalog.model import ArgumentKind, ArgumentSpec, Catalog, Severity
 from aeroexec.errors import Mark, MissionError
+from aeroexec.inputs import read_text
 from aeroexec.verifier.findings import Finding
 from aeroexec.verifier.registry import mission_rule
 from aeroexec.verifier.suggest import Suggester
@@ -140,7 +141,7 @@ def expand_mission_paths(patterns: Iterable[str | Path]) -> list[str]:
     for pattern in patterns:
         text = str(pattern)
         path = Path(text)
-        if path.is_file():
+        if path.exists() and not path.is_dir():  # read_mission refuses a non-regular one
             found[text] = None
             continue
         if path.is_dir():
@@ -156,18 +157,7 @@ def expand_mission_paths(patterns: Iterable[str | Path]) -> list[str]:
 
 
 def read_mission(path: str | Path) -> MissionScript:
-    file = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MissionError("no such file", Mark(file)) from None
-    except IsADirectoryError:
-        raise MissionError("is a directory, not a mission script", Mark(file)) from None
-    except UnicodeDecodeError as exc:
-        raise MissionError(f"not UTF-8 text (byte {exc.start})", Mark(file)) from None
-    except OSError as exc:
-        raise MissionError(f"cannot read: {exc.strerror}", Mark(file)) from None
-    return parse_mission(text, file)
+    return parse_mission(read_text(path, "a mission script", MissionError), str(path))
 
 
 def parse_mission(text: str, file: str = "<mission>") -> MissionScript:

@@ -26,6 +26,7 @@ from pathlib import Path
 import rerun as rr
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.outputs import Pipe, whole_file_or_none
 from aeroexec.recording.reader import Recording, open_recording
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.viz.blueprint import build_blueprint
@@ -181,29 +182,42 @@ def _write(
     stream = rr.RecordingStream(APPLICATION_ID, recording_id=recording_id, send_properties=False)
     stream.set_log_time_enabled(False)  # no wall-clock timeline: same input, same rows
     stream.set_log_tick_enabled(False)
-    stream.save(str(out), default_blueprint=build_blueprint(layouts))
-    stream.send_recording_name(" vs ".join(labels))
-    log_view_coordinates(stream)
-    writer = ColumnWriter(stream)
     reports = []
-    for index, (source, layout) in enumerate(zip(sources, layouts, strict=True)):
-        recording = source.recording
-        stats = _convert(stream, writer, source, layout, index, progress)
-        survey = recording.survey()
-        notes = [*source.notes, *stats.notes, *([] if source.raw_kept else recording.notes)]
-        reports.append(
-            SourceReport(
-                file=source.name,
-                root=layout.origin,
-                complete=survey.end.complete,
-                problem=survey.end.problem,
-                messages=survey.message_count,
-                stats=stats,
-                notes=tuple(notes),
-            )
-        )
-    stream.flush()
-    stream.disconnect()
+    # Written beside `out` and renamed into place when complete: a full disk or a signal
+    # leaves no partial .rrd behind.
+    with whole_file_or_none(out) as temp:
+        # Rerun writes into a FIFO that a thread copies to `temp`: its file sink can
+        # deadlock when a write fails under it (a full disk); ours reports the error.
+        pipe = Pipe(temp)
+        try:
+            stream.save(str(pipe.path), default_blueprint=build_blueprint(layouts))
+            stream.send_recording_name(" vs ".join(labels))
+            log_view_coordinates(stream)
+            writer = ColumnWriter(stream)
+            for index, (source, layout) in enumerate(zip(sources, layouts, strict=True)):
+                recording = source.recording
+                stats = _convert(stream, writer, source, layout, index, progress)
+                survey = recording.survey()
+                notes = [
+                    *source.notes,
+                    *stats.notes,
+                    *([] if source.raw_kept else recording.notes),
+                ]
+                reports.append(
+                    SourceReport(
+                        file=source.name,
+                        root=layout.origin,
+                        complete=survey.end.complete,
+                        problem=survey.end.problem,
+                        messages=survey.message_count,
+                        stats=stats,
+                        notes=tuple(notes),
+                    )
+                )
+            stream.flush()
+        finally:
+            stream.disconnect()  # closes the FIFO: the copy ends
+            pipe.finish()  # raises the copy's write error, if any
     return ViewReport(out, recording_id, tuple(reports))
 
 
