@@ -38,6 +38,7 @@ from test_executive_properties import (
     arguments_for,
 )
 
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.executive import EventCode, Executive
 from aeroexec.executive.messages import ServiceCallRecord
 from aeroexec.recording import Recorder, open_recording
@@ -83,7 +84,10 @@ class SimulatedMachine(ExecutiveMachine):
         self.path = Path(self.folder.name) / "session.mcap"
         self.recorder = Recorder(self.path)
         self.ex = Executive(
-            self.catalog, vehicle=self.vehicle, observers=[self.observer, self.recorder]
+            self.catalog,
+            vehicle=self.vehicle,
+            library=STANDARD_LIBRARY,
+            observers=[self.observer, self.recorder],
         )
         assert self.ex.initiation.ok, self.ex.initiation.error
         # Take off first, mostly, so flying behaviors get their chance (refused on a low

@@ -142,7 +142,9 @@ def test_a_configured_package_runs_replays_and_its_change_is_reported(tmp_path: 
     assert code["SURVEY"].startswith("dronebehaviors.survey:Survey sha256:")
     assert code["GO_TO_POINT"].startswith("dronebehaviors.precise:PreciseGoToPoint sha256:")
 
-    same = aeroexec(project, "replay", "base.mcap", "--check", "-o", "again.mcap")
+    same = aeroexec(
+        project, "replay", "base.mcap", "--mission", "mission.py", "--check", "-o", "again.mcap"
+    )
     assert same.returncode == 0, same.stdout + same.stderr
     assert "no differences (5 commands compared)" in same.stdout
     assert "code changed" not in same.stdout
@@ -154,7 +156,9 @@ def test_a_configured_package_runs_replays_and_its_change_is_reported(tmp_path: 
     fresh = aeroexec(tighter, "run", "mission.py", "--record", "fresh.mcap", "-q")
     assert fresh.returncode == 0, fresh.stderr
     expected = aeroexec(tighter, "diff", str(project / "base.mcap"), "fresh.mcap")
-    replayed = aeroexec(tighter, "replay", str(project / "base.mcap"), "--check")
+    replayed = aeroexec(
+        tighter, "replay", str(project / "base.mcap"), "--mission", "mission.py", "--check"
+    )
     assert replayed.returncode == 1, replayed.stdout + replayed.stderr
     changed = differences(replayed.stdout)
     assert changed and changed == differences(expected.stdout)

@@ -209,7 +209,7 @@ def test_each_standard_behavior_ends_on_the_faults_that_defeat_it(
 ) -> None:
     failing, arguments, state = IMPOSSIBLE[behavior]
     vehicle = FaultyVehicle(state)
-    ex = Executive(load_catalog(DEFAULT_CATALOG), vehicle=vehicle)
+    ex = Executive(load_catalog(DEFAULT_CATALOG), vehicle=vehicle, library=STANDARD_LIBRARY)
     result = ex.activate_behavior(behavior, arguments)
     assert result.ok, result.error
     vehicle.fault = fault
