@@ -18,6 +18,7 @@ from typing import Any
 from aeroexec.catalog import codes
 from aeroexec.catalog.model import (
     DEFAULT_TIMEOUT_S,
+    MAX_TIMEOUT_S,
     ArgumentKind,
     ArgumentSpec,
     BehaviorDescriptor,
@@ -246,6 +247,16 @@ class _CatalogReader:
                 *subjects,
             )
             return ()
+        if not node.is_list:
+            self.report(
+                codes.SCALAR_FOR_LIST,
+                Severity.WARNING,
+                f"{what} is a single name, not a list: aeroexec reads it as "
+                f"[{node.value}], Aerostack's yaml-cpp loaders iterated it as an empty "
+                f"list; write [{node.value}]",
+                node.mark,
+                *subjects,
+            )
         result: list[tuple[str, Mark]] = []
         for item in items:
             name = self.name_of(item, f"an entry of {what}", *subjects)
@@ -266,8 +277,19 @@ class _CatalogReader:
 
     def seconds(self, node: YNode, what: str, *subjects: str) -> float | None:
         value = _as_float(node.value)
-        if value is not None and value > 0:
+        if value is not None and 0 < value <= MAX_TIMEOUT_S:
             return value
+        if value is not None and value > MAX_TIMEOUT_S:
+            # `.inf` and 1e300 pass "positive" but the executive's clock cannot arm
+            # them: the deadline in nanoseconds overflows.
+            problem = f"at most {MAX_TIMEOUT_S:.3g} s (the executive's clock counts int64 ns)"
+            self.error(
+                codes.WRONG_TYPE,
+                f"{what} must be {problem}, got {_kind(node)}",
+                node.mark,
+                *subjects,
+            )
+            return None
         self.error(
             codes.WRONG_TYPE,
             f"{what} must be a positive number of seconds, got {_kind(node)}",
@@ -543,7 +565,7 @@ class _CatalogReader:
                 f"got {_kind(allowed)}",
                 allowed.mark,
             )
-        values = [v.value for v in allowed.value]
+        values = [v.text for v in allowed.value]
         if all(_is_number(v) for v in values):
             if len(values) != 2:
                 return malformed(

@@ -52,6 +52,15 @@ class YNode:
     mark: Mark
     key_marks: dict[str, Mark] = field(default_factory=dict, compare=False)
     duplicate_keys: tuple[tuple[str, Mark], ...] = ()
+    #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
+    #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and compare
+    #: them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
+    raw: str | None = field(default=None, compare=False)
+
+    @property
+    def text(self) -> Any:
+        """The value as yaml-cpp's `as<std::string>()` sees a boolean: its own text."""
+        return self.raw if self.raw is not None else self.value
 
     @property
     def is_map(self) -> bool:
@@ -158,12 +167,19 @@ class _Builder:
             event = loader.get_event()
             done: tuple[YNode, int] | None = None
             if isinstance(event, yaml.AliasEvent):
-                done = self.alias(event)
-                self.spend(done[1], _mark(self.file, event.start_mark))
+                mark = _mark(self.file, event.start_mark)
+                found, size = self.alias(event)
+                self.spend(size, mark)
+                # A reference through an alias is reported where it is used, not at
+                # the anchor (the nodes inside a collection keep their own marks).
+                node = YNode(found.value, mark, found.key_marks, found.duplicate_keys, found.raw)
+                done = (node, size)
             elif isinstance(event, yaml.ScalarEvent):
                 mark = _mark(self.file, event.start_mark)
                 self.spend(1, mark)
-                done = (YNode(self.scalar(event, mark), mark), 1)
+                value = self.scalar(event, mark)
+                raw = event.value if isinstance(value, bool) else None
+                done = (YNode(value, mark, raw=raw), 1)
                 self.remember(event.anchor, done)
             elif isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
                 mapping = isinstance(event, yaml.MappingStartEvent)

@@ -111,6 +111,7 @@ _LOADER_SEVERITY = {
     codes.MALFORMED_ARGUMENT: Severity.ERROR,
     codes.DIALECT: Severity.INFO,
     codes.IGNORED_SECTION: Severity.INFO,
+    codes.SCALAR_FOR_LIST: Severity.WARNING,
 }
 
 for _code, (_name, _doc) in codes.LOADER_DOCS.items():
