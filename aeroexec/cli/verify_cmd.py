@@ -8,9 +8,9 @@ import sys
 import typer
 
 from aeroexec.catalog.model import Severity
-from aeroexec.cli.app import app, guarded
+from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.errors import AeroexecError
-from aeroexec.verifier import expand_catalog_paths, verify
+from aeroexec.verifier import verify
 from aeroexec.verifier.registry import get, suggest_code
 from aeroexec.verifier.report import FORMATS, render
 
@@ -21,8 +21,9 @@ checked by the rules of the registry: dangling references, capability conflicts 
 stop behaviors or initiation, one-sided incompatibilities, start-order cycles,
 recurrent/timeout contradictions, dead lists and capabilities. Mission scripts given
 with --mission are read with Python's ast (never run); every execute, activate and
-inhibit call with literal arguments is checked against each catalog. Every input is
-read before any check runs: an unreadable one stops the run with exit code 2.
+inhibit call with literal arguments is checked against each catalog. An input that
+cannot be read is reported (one line on stderr, and in the json/sarif/github output)
+and the others are verified all the same; the exit code is then 2.
 
 \b
 Examples:
@@ -33,7 +34,7 @@ Examples:
 
 \b
 Exit codes: 0 no errors; 1 errors (or warnings with --strict);
-            2 an input could not be read (one line on stderr).
+            2 an input could not be read (one line each on stderr).
 """
 
 
@@ -97,10 +98,12 @@ def verify_command(
         raise AeroexecError(f"--color takes always or never, got {color!r}")
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
-    report = verify(expand_catalog_paths(catalogs), mission)
+    report = verify(catalogs, mission)
     shown = report.at_least(threshold)
     use_color = _use_color(color)
     text = render(shown, output_format, witness=witness, color=use_color)
     typer.echo(text, nl=False, color=use_color)
-    # The exit code counts every finding, shown or not.
+    for error in report.input_errors:
+        error_line(str(error))
+    # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))

@@ -8,8 +8,38 @@
 from __future__ import annotations
 
 import sys
+from functools import cache
+from importlib import metadata
+from pathlib import Path
 
 from aeroexec.verifier.registry import AREAS, Rule, all_rules
+
+#: docs/rules.md of a source checkout (an editable install), next to the package.
+_LOCAL_RULES_MD = Path(__file__).resolve().parents[2] / "docs" / "rules.md"
+
+
+@cache
+def _rules_doc() -> str | None:
+    """Where docs/rules.md is: the `Documentation` project URL of the installed
+    distribution (`.../rules.md`), else the file in a source checkout, else unknown."""
+    try:
+        urls = metadata.metadata("aeroexec").get_all("Project-URL") or []
+    except metadata.PackageNotFoundError:
+        urls = []
+    for entry in urls:
+        label, _, url = entry.partition(",")
+        if label.strip().lower() == "documentation" and url.strip():
+            return url.strip().rstrip("/") + "/rules.md"
+    if _LOCAL_RULES_MD.is_file():
+        return _LOCAL_RULES_MD.as_uri()
+    return None
+
+
+def rule_doc_url(code: str) -> str | None:
+    """The URL of a rule's paragraph in docs/rules.md (its `### CODE` anchor)."""
+    base = _rules_doc()
+    return None if base is None else f"{base}#{code.lower()}"
+
 
 INTRO = """\
 # aeroexec verify: rules

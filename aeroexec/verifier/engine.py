@@ -1,4 +1,9 @@
-"""Run the verifier: read catalogs and missions, apply every rule, build the report."""
+"""Run the verifier: read catalogs and missions, apply every rule, build the report.
+
+Many inputs, one verdict: an input that cannot be read (a missing file, invalid YAML,
+a mission that is not Python) is recorded as an `InputError` and the others are still
+verified; the report's exit code is then 2.
+"""
 
 from __future__ import annotations
 
@@ -6,10 +11,11 @@ import glob
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+from aeroexec import interrupts
 from aeroexec.catalog.loader import read_catalog
 from aeroexec.catalog.model import Catalog
-from aeroexec.errors import CatalogError, Mark
-from aeroexec.verifier.findings import Finding, Report
+from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.missions import (
     MissionScript,
@@ -65,23 +71,62 @@ def verify_catalog_file(path: str | Path) -> Report:
     return verify_catalog(read_catalog(path))
 
 
+def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) -> list[Catalog]:
+    loaded: list[Catalog] = []
+    for source in sources:
+        if isinstance(source, Catalog):
+            loaded.append(source)
+            continue
+        try:
+            paths = expand_catalog_paths([source])
+        except AeroexecError as exc:
+            errors.append(InputError.of(exc, str(source)))
+            continue
+        for path in paths:
+            interrupts.check()
+            try:
+                loaded.append(read_catalog(path))
+            except AeroexecError as exc:
+                errors.append(InputError.of(exc, path))
+    return loaded
+
+
+def _read_missions(
+    sources: Sequence[str | Path | MissionScript], errors: list[InputError]
+) -> list[MissionScript]:
+    scripts = [m for m in sources if isinstance(m, MissionScript)]
+    for pattern in (m for m in sources if not isinstance(m, MissionScript)):
+        try:
+            paths = expand_mission_paths([pattern])
+        except AeroexecError as exc:
+            errors.append(InputError.of(exc, str(pattern)))
+            continue
+        for path in paths:
+            interrupts.check()
+            try:
+                scripts.append(read_mission(path))
+            except AeroexecError as exc:
+                errors.append(InputError.of(exc, path))
+    return scripts
+
+
 def verify(
     catalogs: Sequence[CatalogInput],
     missions: Sequence[str | Path | MissionScript] = (),
 ) -> Report:
-    """Verify catalogs (paths or loaded catalogs) and the mission scripts (paths, glob
-    patterns or parsed scripts) that use them; every mission is checked against every
-    catalog.
+    """Verify catalogs (paths, glob patterns or loaded catalogs) and the mission
+    scripts (paths, glob patterns or parsed scripts) that use them; every mission is
+    checked against every catalog.
 
-    Every input is read before any rule runs, so unreadable input raises
-    (`CatalogError` / `MissionError`, exit code 2 at the CLI) before any output.
+    An input that cannot be read becomes an `InputError` of the report (exit code 2)
+    and the rest are verified all the same.
     """
-    loaded = [c if isinstance(c, Catalog) else read_catalog(c) for c in catalogs]
-    patterns = [m for m in missions if not isinstance(m, MissionScript)]
-    scripts = [m for m in missions if isinstance(m, MissionScript)]
-    scripts += [read_mission(path) for path in expand_mission_paths(patterns)]
+    errors: list[InputError] = []
+    loaded = _read_catalogs(catalogs, errors)
+    scripts = _read_missions(missions, errors)
     findings: list[Finding] = []
     for catalog in loaded:
+        interrupts.check()
         findings.extend(check_catalog(catalog))
         note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
         for script in scripts:
@@ -90,4 +135,5 @@ def verify(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),
         missions=tuple(s.path for s in scripts),
+        input_errors=tuple(errors),
     )

@@ -8,9 +8,9 @@ from enum import Enum
 from typing import Any
 
 from aeroexec.catalog.model import Diagnostic, Severity
-from aeroexec.errors import Mark
+from aeroexec.errors import AeroexecError, Mark, one_line
 
-__all__ = ["Finding", "Outcome", "Report", "Severity", "Step", "Witness"]
+__all__ = ["Finding", "InputError", "Outcome", "PathStep", "Report", "Severity", "Step", "Witness"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,6 +57,59 @@ class Witness:
 
 
 @dataclass(frozen=True, slots=True)
+class PathStep:
+    """One step of the way through a mission that leads to a finding: a mission call
+    (`execute`, `activate`, `inhibit`) or a decision (`branch`, `loop`, `return`)."""
+
+    line: int
+    column: int
+    action: str
+    detail: str = ""
+
+    def describe(self) -> str:
+        return f"{self.line}: {self.action}{' ' + self.detail if self.detail else ''}"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "line": self.line,
+            "column": self.column,
+            "action": self.action,
+            "detail": self.detail,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class InputError:
+    """An input the verifier could not read; the other inputs are still verified."""
+
+    message: str
+    file: str
+    line: int = 0
+    column: int = 0
+
+    @classmethod
+    def of(cls, error: AeroexecError, file: str = "") -> InputError:
+        mark = error.mark or Mark(file)
+        return cls(error.message, mark.file, max(mark.line, 0), max(mark.column, 0))
+
+    @property
+    def mark(self) -> Mark:
+        return Mark(self.file, self.line, self.column)
+
+    def __str__(self) -> str:
+        where = str(self.mark) if self.file else "aeroexec"
+        return one_line(f"{where}: error: {self.message}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "message": self.message,
+            "file": self.file,
+            "line": self.line,
+            "column": self.column,
+        }
+
+
+@dataclass(frozen=True, slots=True)
 class Finding:
     """One problem at one place. `line`/`column` are 1-based; 0 when unknown."""
 
@@ -68,6 +121,8 @@ class Finding:
     column: int = 0
     subjects: tuple[str, ...] = ()
     witness: Witness | None = None
+    #: For mission findings: the way through the mission that leads here.
+    path: tuple[PathStep, ...] = ()
 
     @classmethod
     def at(
@@ -78,6 +133,7 @@ class Finding:
         mark: Mark,
         subjects: Iterable[str] = (),
         witness: Witness | None = None,
+        path: tuple[PathStep, ...] = (),
     ) -> Finding:
         return cls(
             rule,
@@ -88,6 +144,7 @@ class Finding:
             max(mark.column, 0),
             tuple(dict.fromkeys(subjects)),
             witness,
+            path,
         )
 
     @classmethod
@@ -121,6 +178,7 @@ class Finding:
             "column": self.column,
             "subjects": list(self.subjects),
             "witness": None if self.witness is None else self.witness.to_list(),
+            "path": [step.to_dict() for step in self.path],
         }
 
     def __str__(self) -> str:
@@ -139,6 +197,8 @@ class Report:
     missions: tuple[str, ...] = ()
     #: Findings left out by `at_least` (below the severity asked for).
     hidden: int = 0
+    #: Inputs that could not be read (the others were verified all the same).
+    input_errors: tuple[InputError, ...] = ()
     _counts: Mapping[Severity, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -162,7 +222,10 @@ class Report:
         return self._counts[Severity.INFO]
 
     def exit_code(self, strict: bool = False) -> int:
-        """0 no errors; 1 errors (or warnings when `strict`)."""
+        """0 no errors; 1 errors (or warnings when `strict`); 2 an input could not be
+        read (whatever the others gave)."""
+        if self.input_errors:
+            return 2
         if self.errors or (strict and self.warnings):
             return 1
         return 0
@@ -177,6 +240,7 @@ class Report:
             self.catalogs,
             self.missions,
             self.hidden + len(self.findings) - len(kept),
+            self.input_errors,
         )
 
     def by_rule(self, rule: str) -> tuple[Finding, ...]:
@@ -189,4 +253,5 @@ class Report:
         return {
             "findings": [f.to_dict() for f in self.findings],
             "summary": self.summary(),
+            "inputErrors": [e.to_dict() for e in self.input_errors],
         }
