@@ -260,14 +260,18 @@ def test_invalid_yaml(tmp_path: Path) -> None:
     assert_one_line_error(*run(str(bad)), f"{bad}:", "error: invalid YAML")
 
 
-def test_task_based_catalog_is_unreadable() -> None:
+def test_task_based_catalog_is_verified() -> None:
     task = (
         Path(__file__).resolve().parent
         / "fixtures"
         / "verifier_catalogs"
-        / "cvar-upm+aerostack__config_mission_behavior_catalog__abbd8b2.yaml"
+        / "cvar-upm+coordinator_cbc__behavior_coordinator_src_test_behavior_catalog_missing_task"
+        "__4edaaf8.yaml"
     )
-    assert_one_line_error(*run(str(task)), "task-based catalog")
+    code, out, err = run(str(task), "--witness")
+    assert (code, err) == (1, "")
+    assert f"{task}:111:11: error AX812 QUADROTOR_MPC_MOTION_CONTROL requires task " in out
+    assert "    witness: start task MPC_MOTION_CONTROL: the start of MPC_MOTION_CONTROL is " in out
 
 
 def test_mission_syntax_error(tmp_path: Path) -> None:

@@ -80,11 +80,11 @@ def read_catalog_text(path: str | Path) -> tuple[str, str]:
     """The catalog's text and the name to show for it; `CatalogError` if unreadable."""
     file = str(path)
     p = Path(path)
-    if not p.exists():
-        raise CatalogError("no such file", Mark(file))
-    if p.is_dir():
-        raise CatalogError("is a directory, not a catalog file", Mark(file))
     try:
+        if not p.exists():
+            raise CatalogError("no such file", Mark(file))
+        if p.is_dir():
+            raise CatalogError("is a directory, not a catalog file", Mark(file))
         return p.read_text(encoding="utf-8"), file
     except UnicodeDecodeError as exc:
         raise CatalogError(f"not UTF-8 text (byte {exc.start})", _byte_mark(file, exc)) from None
@@ -119,7 +119,11 @@ def strict(catalog: Catalog) -> Catalog:
 
 
 def parse_catalog(text: str, file: str = "<string>") -> Catalog:
-    root = load_yaml(text, file)
+    return parse_root(load_yaml(text, file), text, file)
+
+
+def parse_root(root: YNode | None, text: str, file: str) -> Catalog:
+    """A behavior catalog from its parsed YAML; `CatalogError` for another format."""
     if root is None:
         raise CatalogError("empty document: a catalog needs behavior_descriptors", Mark(file, 1, 1))
     if not root.is_map:
@@ -135,13 +139,22 @@ def _refuse_other_formats(root: YNode) -> None:
     if "behavior_descriptors" in keys:
         return
     if "behaviors" in keys and ({"tasks", "default_values", "exclusivity_constraints"} & keys):
+        # The executive is the 2017 coordinator (lists, capabilities, preemption); a
+        # task catalog needs the 2021 constraint-based assignment of behaviors to tasks,
+        # which it does not implement. `aeroexec verify` reads and checks task catalogs.
         raise CatalogError(
             "this is an Aerostack 4.x task-based catalog (behaviors/tasks/default_values, "
-            "2020-2021), not a behavior catalog; aeroexec reads the 2017 thesis format and "
-            "the Aerostack 2.x format (behavior_descriptors/behavior_lists/"
-            "capability_descriptors)",
+            "2020-2021), not a behavior catalog: aeroexec's executive runs the 2017 "
+            "behavior coordinator (the thesis and Aerostack 2.x formats: "
+            "behavior_descriptors/behavior_lists/capability_descriptors), not the 2021 "
+            "task coordinator; `aeroexec verify` checks task catalogs",
             root.mark,
         )
+
+
+def node_kind(node: YNode) -> str:
+    """`mapping`, `list`, `null` or `int (5)`: what a value is, for messages."""
+    return _kind(node)
 
 
 def _kind(node: YNode) -> str:

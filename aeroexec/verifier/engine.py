@@ -12,8 +12,9 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from aeroexec import interrupts
-from aeroexec.catalog.loader import read_catalog
+from aeroexec.catalog.formats import AnyCatalog, read_any_catalog
 from aeroexec.catalog.model import Catalog
+from aeroexec.catalog.tasks import TaskCatalog
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
@@ -23,9 +24,10 @@ from aeroexec.verifier.missions import (
     expand_mission_paths,
     read_mission,
 )
-from aeroexec.verifier.registry import catalog_checks
+from aeroexec.verifier.registry import catalog_checks, task_checks
+from aeroexec.verifier.task_rules import TaskContext
 
-CatalogInput = str | Path | Catalog
+CatalogInput = str | Path | Catalog | TaskCatalog
 
 
 def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
@@ -35,7 +37,7 @@ def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
     result: list[str] = []
     for pattern in patterns:
         text = str(pattern)
-        if Path(text).exists() or not glob.has_magic(text):
+        if not glob.has_magic(text) or _exists(text):
             result.append(text)
             continue
         matches = sorted(glob.glob(text, recursive=True))
@@ -43,6 +45,13 @@ def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
             raise CatalogError("no catalog matches this pattern", Mark(text))
         result.extend(matches)
     return result
+
+
+def _exists(path: str) -> bool:
+    try:
+        return Path(path).exists()
+    except OSError:  # e.g. a name too long: the loader says so
+        return False
 
 
 def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[Finding]:
@@ -61,20 +70,40 @@ def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[
     return findings
 
 
-def verify_catalog(catalog: Catalog) -> Report:
-    """Verify one loaded catalog."""
-    return Report(tuple(check_catalog(catalog)), catalogs=(catalog.source,))
+def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None) -> list[Finding]:
+    """The task loader's diagnostics plus every task rule's findings (unsorted)."""
+    wanted = None if codes is None else set(codes)
+    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
+    context = TaskContext(catalog)
+    for rule in task_checks():
+        if wanted is not None and rule.code not in wanted:
+            continue
+        assert rule.check is not None
+        findings.extend(rule.check(context))  # type: ignore[arg-type]
+    return findings
+
+
+def check_any_catalog(catalog: AnyCatalog) -> list[Finding]:
+    if isinstance(catalog, TaskCatalog):
+        return check_task_catalog(catalog)
+    return check_catalog(catalog)
+
+
+def verify_catalog(catalog: AnyCatalog) -> Report:
+    """Verify one loaded catalog (a behavior catalog or a task catalog)."""
+    return Report(tuple(check_any_catalog(catalog)), catalogs=(catalog.source,))
 
 
 def verify_catalog_file(path: str | Path) -> Report:
-    """Read (leniently) and verify one catalog file; `CatalogError` if unreadable."""
-    return verify_catalog(read_catalog(path))
+    """Read (leniently) and verify one catalog file of any generation; `CatalogError`
+    if unreadable."""
+    return verify_catalog(read_any_catalog(path))
 
 
-def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) -> list[Catalog]:
-    loaded: list[Catalog] = []
+def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) -> list[AnyCatalog]:
+    loaded: list[AnyCatalog] = []
     for source in sources:
-        if isinstance(source, Catalog):
+        if isinstance(source, (Catalog, TaskCatalog)):
             loaded.append(source)
             continue
         try:
@@ -85,7 +114,7 @@ def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) ->
         for path in paths:
             interrupts.check()
             try:
-                loaded.append(read_catalog(path))
+                loaded.append(read_any_catalog(path))
             except AeroexecError as exc:
                 errors.append(InputError.of(exc, path))
     return loaded
@@ -114,9 +143,9 @@ def verify(
     catalogs: Sequence[CatalogInput],
     missions: Sequence[str | Path | MissionScript] = (),
 ) -> Report:
-    """Verify catalogs (paths, glob patterns or loaded catalogs) and the mission
-    scripts (paths, glob patterns or parsed scripts) that use them; every mission is
-    checked against every catalog.
+    """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
+    the mission scripts (paths, glob patterns or parsed scripts) that use them; every
+    mission is checked against every behavior catalog.
 
     An input that cannot be read becomes an `InputError` of the report (exit code 2)
     and the rest are verified all the same.
@@ -125,10 +154,14 @@ def verify(
     loaded = _read_catalogs(catalogs, errors)
     scripts = _read_missions(missions, errors)
     findings: list[Finding] = []
+    behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
         interrupts.check()
-        findings.extend(check_catalog(catalog))
-        note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
+        findings.extend(check_any_catalog(catalog))
+    # Missions use the behavior API (execute/activate/inhibit_behavior): they are
+    # checked against the behavior catalogs.
+    for catalog in behavior_catalogs:
+        note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:
             findings.extend(check_mission(script, catalog, note))
     return Report(

@@ -15,13 +15,19 @@ __all__ = ["Finding", "InputError", "Outcome", "PathStep", "Report", "Severity",
 
 @dataclass(frozen=True, slots=True)
 class Step:
-    """One activation of a witness: `activate_behavior(name, arguments)`."""
+    """One request of a witness: `activate_behavior(name, arguments)`, or for a task
+    catalog `start_task(name, arguments)` (`service` "start_task")."""
 
     activate: str
     arguments: tuple[tuple[str, Any], ...] = ()
+    service: str = "activate"
 
     def to_dict(self) -> dict[str, Any]:
-        return {"activate": self.activate, "arguments": dict(self.arguments)}
+        return {self.service: self.activate, "arguments": dict(self.arguments)}
+
+    def describe(self) -> str:
+        verb = "start task" if self.service == "start_task" else "activate"
+        return f"{verb} {self.activate}"
 
 
 class Outcome(str, Enum):
@@ -50,9 +56,10 @@ class Witness:
         if self.outcome is Outcome.INITIATION_FAILS:
             return "initiation fails before any activation"
         names = [s.activate for s in self.steps]
-        sequence = ", then ".join(f"activate {n}" for n in names)
+        sequence = ", then ".join(step.describe() for step in self.steps)
         if self.outcome is Outcome.REJECTED:
-            return f"{sequence}: the activation of {names[-1]} is rejected"
+            request = "start" if self.steps[-1].service == "start_task" else "activation"
+            return f"{sequence}: the {request} of {names[-1]} is rejected"
         return f"{sequence}: all of {', '.join(dict.fromkeys(names))} stay active"
 
 

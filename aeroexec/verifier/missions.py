@@ -140,10 +140,14 @@ def expand_mission_paths(patterns: Iterable[str | Path]) -> list[str]:
     for pattern in patterns:
         text = str(pattern)
         path = Path(text)
-        if path.is_file():
+        try:
+            is_file, is_dir = path.is_file(), path.is_dir()
+        except OSError as exc:  # e.g. a name too long
+            raise MissionError(f"cannot read: {exc.strerror}", Mark(text)) from None
+        if is_file:
             found[text] = None
             continue
-        if path.is_dir():
+        if is_dir:
             raise MissionError("is a directory; give mission files or a glob", Mark(text))
         if glob.has_magic(text):
             matches = sorted(m for m in glob.glob(text, recursive=True) if Path(m).is_file())

@@ -5,11 +5,13 @@ Three kinds of entries:
 * `loader` — diagnostics the catalog loader already emits (AX1xx, from
   `aeroexec.catalog.codes`); the verifier passes them through and documents them here;
 * `catalog` — rules over a loaded catalog and its graphs (AX2xx-AX6xx);
-* `mission` — checks of mission scripts against a catalog (AX7xx).
+* `mission` — checks of mission scripts against a catalog (AX7xx);
+* `task` — rules over an Aerostack 4.x task catalog (AX81x-AX82x; its loader's
+  diagnostics are AX80x, from `aeroexec.catalog.task_codes`).
 
 Codes by range: AX1xx loading, AX2xx references, AX3xx capability consistency,
 AX4xx incompatibility, AX5xx start order, AX6xx behavior properties (recurrent/timeout,
-argument specs), AX7xx missions.
+argument specs), AX7xx missions, AX8xx task catalogs (2020-2021).
 """
 
 from __future__ import annotations
@@ -20,16 +22,18 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from aeroexec.catalog import codes
+from aeroexec.catalog import codes, task_codes
 from aeroexec.catalog.model import Severity
 from aeroexec.verifier.findings import Finding
 
 if TYPE_CHECKING:
     from aeroexec.verifier.graphs import CatalogGraphs
+    from aeroexec.verifier.task_rules import TaskContext
 
 CatalogCheck = Callable[["CatalogGraphs"], Iterable[Finding]]
+TaskCheck = Callable[["TaskContext"], Iterable[Finding]]
 
-KINDS = ("loader", "catalog", "mission")
+KINDS = ("loader", "catalog", "mission", "task")
 
 AREAS = {
     "AX1": "Loading (reported by the catalog loader)",
@@ -39,6 +43,7 @@ AREAS = {
     "AX5": "Start order",
     "AX6": "Behavior properties",
     "AX7": "Missions",
+    "AX8": "Task catalogs (Aerostack 4.x, 2020-2021)",
 }
 
 
@@ -51,7 +56,7 @@ class Rule:
     #: One paragraph: what it is, how it fails in flight, how to fix it.
     doc: str
     kind: str
-    check: CatalogCheck | None = None
+    check: CatalogCheck | TaskCheck | None = None
     #: Findings of this rule carry a witness (an activation sequence) when one exists.
     witness: bool = False
 
@@ -95,6 +100,18 @@ def catalog_rule(
     return decorate
 
 
+def task_rule(
+    code: str, name: str, severity: Severity, doc: str, *, witness: bool = False
+) -> Callable[[TaskCheck], TaskCheck]:
+    """Decorator: register a check over a task catalog (`TaskContext`) as rule `code`."""
+
+    def decorate(check: TaskCheck) -> TaskCheck:
+        register(Rule(code, name, severity, " ".join(doc.split()), "task", check, witness))
+        return check
+
+    return decorate
+
+
 def mission_rule(code: str, name: str, severity: Severity, doc: str) -> Rule:
     return register(Rule(code, name, severity, " ".join(doc.split()), "mission"))
 
@@ -116,6 +133,8 @@ _LOADER_SEVERITY = {
 
 for _code, (_name, _doc) in codes.LOADER_DOCS.items():
     register(Rule(_code, _name, _LOADER_SEVERITY.get(_code), _doc, "loader"))
+for _code, (_name, _severity, _doc) in task_codes.TASK_LOADER_DOCS.items():
+    register(Rule(_code, _name, _severity, _doc, "loader"))
 
 
 def _load_rule_modules() -> None:
@@ -123,6 +142,7 @@ def _load_rule_modules() -> None:
     # whichever module a caller imported first.
     importlib.import_module("aeroexec.verifier.rules")
     importlib.import_module("aeroexec.verifier.missions")
+    importlib.import_module("aeroexec.verifier.task_rules")
 
 
 def all_rules(kind: str | None = None) -> tuple[Rule, ...]:
@@ -148,5 +168,11 @@ def suggest_code(code: str) -> str:
 
 def catalog_checks() -> Iterator[Rule]:
     for rule in all_rules("catalog"):
+        if rule.check is not None:
+            yield rule
+
+
+def task_checks() -> Iterator[Rule]:
+    for rule in all_rules("task"):
         if rule.check is not None:
             yield rule
