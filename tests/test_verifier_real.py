@@ -222,8 +222,26 @@ def test_appendix_c_mission_against_appendix_a() -> None:
         assert finding.subjects == ("PAY_ATTENTION_TO_VISUAL_MARKERS",)
 
 
-def test_appendix_c_mission_is_clean_against_the_default_catalog() -> None:
+def test_appendix_c_mission_against_the_default_catalog_leaves_attention_running() -> None:
+    """Every call of the thesis' mission is valid against the default catalog; as a
+    sequence, its `else` branch (position unknown: land and return) never inhibits
+    the recurrent PAY_ATTENTION_TO_VISUAL_MARKERS activated before it."""
     from aeroexec.catalog import DEFAULT_CATALOG
 
-    report = verify([DEFAULT_CATALOG], missions=[ROOT / "missions" / "appendix_c.py"])
-    assert [str(f) for f in report.findings if f.severity.value != "info"] == []
+    mission = ROOT / "missions" / "appendix_c.py"
+    lines = mission.read_text(encoding="utf-8").splitlines()
+    report = verify([DEFAULT_CATALOG], missions=[mission])
+    [finding] = [f for f in report.findings if f.severity.value != "info"]
+    activation = next(i for i, t in enumerate(lines, 1) if "api.activateBehavior(" in t)
+    landing = next(i for i, t in enumerate(lines, 1) if "Position unknown, landing" in t)
+    assert (finding.rule, finding.line, finding.column) == ("AX712", activation, 5)
+    assert [(s.action, s.detail) for s in finding.path] == [
+        ("execute", "TAKE_OFF"),
+        ("activate", "PAY_ATTENTION_TO_VISUAL_MARKERS"),
+        ("execute", "GO_TO_POINT"),
+        ("else", ""),
+        ("execute", "LAND"),
+        ("return", ""),
+    ]
+    assert finding.path[4].line == landing + 1
+    assert "when the mission ends at line" in finding.message

@@ -54,9 +54,17 @@ def fixture_for(rule: Rule, clean: bool = False) -> Path:
     return path
 
 
+def mission_catalog(path: Path) -> Path:
+    """`# catalog: NAME` on a mission fixture's first line names its catalog."""
+    first = path.read_text(encoding="utf-8").splitlines()[0]
+    if first.startswith("# catalog:"):
+        return MISSIONS / first.removeprefix("# catalog:").split()[0]
+    return MISSION_CATALOG
+
+
 def findings_of(path: Path) -> list[Finding]:
     if path.suffix == ".py":
-        return check_mission(read_mission(path), read_catalog(MISSION_CATALOG))
+        return check_mission(read_mission(path), read_catalog(mission_catalog(path)))
     return check_any_catalog(read_any_catalog(path))
 
 

@@ -14,7 +14,7 @@ from aeroexec.behaviors._support import (
     low_battery_reason,
     must_be_flying,
 )
-from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, Situation
+from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 
@@ -23,6 +23,8 @@ class TakeOff(MotionBehavior):
     """Arm and climb to `altitude` (1 m, Aerostack's usual take-off height), then hold."""
 
     name = "TAKE_OFF"
+    needs = FlightState.LANDED
+    leaves = FlightState.FLYING
     altitude = 1.0
     tolerance = 0.05  # m
 
@@ -54,6 +56,8 @@ class Land(Behavior):
     landing, since hovering is not a safe default for a vehicle that was told to land."""
 
     name = "LAND"
+    needs = FlightState.FLYING
+    leaves = FlightState.LANDED
     fails_on_faults = LINK_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

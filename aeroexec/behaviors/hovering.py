@@ -15,7 +15,7 @@ from aeroexec.behaviors._support import (
     low_battery_reason,
     must_be_flying,
 )
-from aeroexec.executive.behavior import ALLOWED, Finished, Situation
+from aeroexec.executive.behavior import ALLOWED, Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 
@@ -25,6 +25,7 @@ class KeepHovering(MotionBehavior):
     that visual marker: it must be in view at the start and is a failure to lose."""
 
     name = "KEEP_HOVERING"
+    needs = FlightState.FLYING
     default_duration = 5.0
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -50,6 +51,7 @@ class StartHovering(MotionBehavior):
     """Brake and hold position; succeeds once the vehicle has (nearly) stopped."""
 
     name = "START_HOVERING"
+    needs = FlightState.FLYING
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)
@@ -71,6 +73,7 @@ class Flip(MotionBehavior):
     battery that is not low (a flip draws a burst of power)."""
 
     name = "FLIP"
+    needs = FlightState.FLYING
     min_altitude = 1.0  # m
     max_duration = 3.0  # s: a flip the vehicle has not finished by then went wrong
 

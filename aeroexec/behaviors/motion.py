@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 from aeroexec.behaviors._support import (
     MotionBehavior,
@@ -12,7 +12,7 @@ from aeroexec.behaviors._support import (
     fmt,
     must_be_flying,
 )
-from aeroexec.executive.behavior import ALLOWED, Finished, Situation
+from aeroexec.executive.behavior import ALLOWED, Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 from aeroexec.vehicles.base import Vec3
@@ -29,6 +29,14 @@ class GoToPoint(MotionBehavior):
     """Fly to COORDINATES (absolute) or RELATIVE_COORDINATES (from where it starts)."""
 
     name = "GO_TO_POINT"
+    needs = FlightState.FLYING
+    #: Arguments that are destinations, absolute or relative to where the behavior
+    #: starts: the verifier checks that they can be reached within the timeout at the
+    #: vehicle's speed limits.
+    destinations: ClassVar[Mapping[str, str]] = {
+        "COORDINATES": "absolute",
+        "RELATIVE_COORDINATES": "relative",
+    }
     #: Reached = within `tolerance` and nearly stopped. 5 cm: close enough that a point
     #: memorized right after arriving is the point asked for; loose enough for a real
     #: autopilot's position hold.
@@ -88,6 +96,7 @@ class StartMoving(MotionBehavior):
     """
 
     name = "START_MOVING"
+    needs = FlightState.FLYING
     tolerance = 0.1  # m/s
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -126,6 +135,7 @@ class FollowObjectImage(MotionBehavior):
     `reach` metres of it (horizontally); fails if the object stays out of sight."""
 
     name = "FOLLOW_OBJECT_IMAGE"
+    needs = FlightState.FLYING
     reach = 1.0  # m
     lost_after = 2.0  # s out of sight
 

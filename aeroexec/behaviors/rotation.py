@@ -12,7 +12,7 @@ from aeroexec.behaviors._support import (
     angle_error_degrees,
     must_be_flying,
 )
-from aeroexec.executive.behavior import Finished, Situation
+from aeroexec.executive.behavior import Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 
@@ -23,6 +23,7 @@ class Rotate(MotionBehavior):
     yaw in degrees. 270 and -90 are the same heading; the vehicle turns the short way."""
 
     name = "ROTATE"
+    needs = FlightState.FLYING
     tolerance = 1.0  # degrees
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

@@ -10,6 +10,7 @@ import typer
 from aeroexec.catalog.model import Severity
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.errors import AeroexecError
+from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
 from aeroexec.verifier.registry import get, suggest_code
 from aeroexec.verifier.report import FORMATS, render
@@ -62,6 +63,13 @@ def verify_command(
     output_format: str = typer.Option(
         "text", "--format", "-f", metavar="FORMAT", help="text, json, sarif or github."
     ),
+    world: str | None = typer.Option(
+        None,
+        "--world",
+        "-w",
+        metavar="FILE",
+        help="World file whose vehicle limits the reach checks use (default: built-in).",
+    ),
     strict: bool = typer.Option(False, "--strict", help="Exit 1 on warnings too."),
     witness: bool = typer.Option(
         False, "--witness", help="Print each finding's witness activation sequence."
@@ -98,7 +106,8 @@ def verify_command(
         raise AeroexecError(f"--color takes always or never, got {color!r}")
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
-    report = verify(catalogs, mission)
+    limits = load_world(world) if world is not None else None
+    report = verify(catalogs, mission, world=limits)
     shown = report.at_least(threshold)
     use_color = _use_color(color)
     text = render(shown, output_format, witness=witness, color=use_color)

@@ -8,7 +8,7 @@ verified; the report's exit code is then 2.
 from __future__ import annotations
 
 import glob
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 from aeroexec import interrupts
@@ -16,6 +16,8 @@ from aeroexec.catalog.formats import AnyCatalog, read_any_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.tasks import TaskCatalog
 from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.executive.behavior import Behavior
+from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.missions import (
@@ -28,6 +30,7 @@ from aeroexec.verifier.registry import catalog_checks, task_checks
 from aeroexec.verifier.task_rules import TaskContext
 
 CatalogInput = str | Path | Catalog | TaskCatalog
+Library = Mapping[str, type[Behavior]]
 
 
 def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
@@ -54,14 +57,22 @@ def _exists(path: str) -> bool:
         return False
 
 
-def check_catalog(catalog: Catalog, codes: Iterable[str] | None = None) -> list[Finding]:
+def check_catalog(
+    catalog: Catalog,
+    codes: Iterable[str] | None = None,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
+) -> list[Finding]:
     """The loader's diagnostics plus every catalog rule's findings (unsorted).
 
-    `codes` restricts the rules that run (loader diagnostics always pass through).
+    `codes` restricts the rules that run (loader diagnostics always pass through);
+    `world` gives the vehicle limits (default: the built-in world), `library` the
+    behavior implementations whose declarations rules read (default: the standard one).
     """
     wanted = None if codes is None else set(codes)
     findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
-    graphs = CatalogGraphs(catalog)
+    graphs = CatalogGraphs(catalog, world, library)
     for rule in catalog_checks():
         if wanted is not None and rule.code not in wanted:
             continue
@@ -83,10 +94,12 @@ def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None)
     return findings
 
 
-def check_any_catalog(catalog: AnyCatalog) -> list[Finding]:
+def check_any_catalog(
+    catalog: AnyCatalog, *, world: World | None = None, library: Library | None = None
+) -> list[Finding]:
     if isinstance(catalog, TaskCatalog):
         return check_task_catalog(catalog)
-    return check_catalog(catalog)
+    return check_catalog(catalog, world=world, library=library)
 
 
 def verify_catalog(catalog: AnyCatalog) -> Report:
@@ -142,13 +155,18 @@ def _read_missions(
 def verify(
     catalogs: Sequence[CatalogInput],
     missions: Sequence[str | Path | MissionScript] = (),
+    *,
+    world: World | None = None,
+    library: Library | None = None,
 ) -> Report:
     """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
     the mission scripts (paths, glob patterns or parsed scripts) that use them; every
     mission is checked against every behavior catalog.
 
     An input that cannot be read becomes an `InputError` of the report (exit code 2)
-    and the rest are verified all the same.
+    and the rest are verified all the same. `world` (the vehicle's limits) and `library`
+    (the behavior implementations, for their declared situations and destinations)
+    default to the built-in world and the standard library.
     """
     errors: list[InputError] = []
     loaded = _read_catalogs(catalogs, errors)
@@ -157,13 +175,13 @@ def verify(
     behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
         interrupts.check()
-        findings.extend(check_any_catalog(catalog))
+        findings.extend(check_any_catalog(catalog, world=world, library=library))
     # Missions use the behavior API (execute/activate/inhibit_behavior): they are
     # checked against the behavior catalogs.
     for catalog in behavior_catalogs:
         note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:
-            findings.extend(check_mission(script, catalog, note))
+            findings.extend(check_mission(script, catalog, note, library=library, world=world))
     return Report(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),

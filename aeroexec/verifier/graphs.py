@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 import networkx as nx
 
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.catalog.model import (
     BehaviorDescriptor,
     BehaviorList,
@@ -38,6 +39,8 @@ from aeroexec.catalog.model import (
     Severity,
 )
 from aeroexec.errors import Mark
+from aeroexec.executive.behavior import Behavior
+from aeroexec.vehicles.world import World, default_world
 from aeroexec.verifier.findings import Finding, Witness
 from aeroexec.verifier.suggest import Suggester
 
@@ -81,11 +84,27 @@ def node_label(node: Node) -> str:
 
 
 class CatalogGraphs:
-    """The context every catalog rule receives."""
+    """The context every catalog rule receives: the catalog, and the world and behavior
+    library it is meant to fly with (the vehicle's limits; what implementations declare)."""
 
-    def __init__(self, catalog: Catalog) -> None:
+    def __init__(
+        self,
+        catalog: Catalog,
+        world: World | None = None,
+        library: Mapping[str, type[Behavior]] | None = None,
+    ) -> None:
         self.catalog = catalog
         self.file = catalog.source
+        self._world = world
+        self._library = library
+
+    @cached_property
+    def world(self) -> World:
+        return self._world or default_world()
+
+    @cached_property
+    def library(self) -> Mapping[str, type[Behavior]]:
+        return STANDARD_LIBRARY if self._library is None else self._library
 
     # -- findings ------------------------------------------------------------------------
     def finding(
