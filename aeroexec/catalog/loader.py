@@ -30,6 +30,7 @@ from aeroexec.catalog.model import (
 )
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import CatalogError, Mark
+from aeroexec.gc_pause import paused_gc
 
 TOP_LEVEL_TAGS = (
     "behavior_descriptors",
@@ -131,7 +132,8 @@ def parse_root(root: YNode | None, text: str, file: str) -> Catalog:
             f"a catalog is a mapping with behavior_descriptors, got a {_kind(root)}", root.mark
         )
     _refuse_other_formats(root)
-    return _CatalogReader(file, text).read(root)
+    with paused_gc():
+        return _CatalogReader(file, text).read(root)
 
 
 def _refuse_other_formats(root: YNode) -> None:

@@ -27,6 +27,7 @@ from aeroexec.catalog.tasks import (
 )
 from aeroexec.catalog.yamlnodes import YNode
 from aeroexec.errors import Mark
+from aeroexec.gc_pause import paused_gc
 
 TOP_LEVEL = ("default_values", "behaviors", "tasks", "exclusivity_constraints")
 #: Task attribute keys of each vocabulary, and what each means in the model.
@@ -56,7 +57,8 @@ def is_task_catalog(root: YNode) -> bool:
 
 
 def read_task_catalog(root: YNode, file: str, text: str = "") -> TaskCatalog:
-    return _TaskReader(file, text).read(root)
+    with paused_gc():
+        return _TaskReader(file, text).read(root)
 
 
 class _TaskReader:

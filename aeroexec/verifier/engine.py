@@ -17,6 +17,7 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.tasks import TaskCatalog
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.executive.behavior import Behavior
+from aeroexec.gc_pause import paused_gc
 from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
@@ -168,6 +169,18 @@ def verify(
     (the behavior implementations, for their declared situations and destinations)
     default to the built-in world and the standard library.
     """
+    # The rules build graphs and indexes as large as the catalog: no cyclic garbage
+    # worth the collector's passes over everything already loaded.
+    with paused_gc():
+        return _verify(catalogs, missions, world, library)
+
+
+def _verify(
+    catalogs: Sequence[CatalogInput],
+    missions: Sequence[str | Path | MissionScript],
+    world: World | None,
+    library: Library | None,
+) -> Report:
     errors: list[InputError] = []
     loaded = _read_catalogs(catalogs, errors)
     scripts = _read_missions(missions, errors)

@@ -469,17 +469,27 @@ class CatalogGraphs:
             else:
                 graph.add_edge(u, v, why=[why])
 
+        unique_processes: dict[str, tuple[str, ...]] = {}
+        up_with: dict[str, frozenset[str]] = {}
+
         def processes(name: str) -> tuple[str, ...]:
-            return tuple(dict.fromkeys(capabilities[name].processes))
+            found = unique_processes.get(name)
+            if found is None:
+                found = unique_processes[name] = tuple(dict.fromkeys(capabilities[name].processes))
+            return found
 
-        def running_after(name: str) -> set[str]:
-            """Processes running once `name` is up (with what it requires)."""
-            running: set[str] = set()
-            for capability in self.closure(name) or (name,):
-                running.update(processes(capability))
-            return running
+        def running_after(name: str) -> frozenset[str]:
+            """Processes running once `name` is up (with what it requires); once per
+            capability, however many behaviors list it."""
+            found = up_with.get(name)
+            if found is None:
+                running: set[str] = set()
+                for capability in self.closure(name) or (name,):
+                    running.update(processes(capability))
+                found = up_with[name] = frozenset(running)
+            return found
 
-        def entry(name: str, running: set[str]) -> Node:
+        def entry(name: str, running: set[str] | frozenset[str]) -> Node:
             for process in processes(name):
                 if process not in running:
                     return ("process", process)
