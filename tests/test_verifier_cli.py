@@ -412,3 +412,20 @@ def test_sarif_fingerprints_are_unique_and_survive_line_shifts(tmp_path: Path) -
     lines = [r["locations"][0]["physicalLocation"]["region"]["startLine"] for r in results]
     moved = [r["locations"][0]["physicalLocation"]["region"]["startLine"] for r in shifted]
     assert moved == [line + 2 for line in lines]
+
+
+# -- the vehicle's limits come from the world description ----------------------------------
+def test_reach_checks_use_the_limits_of_the_world_given() -> None:
+    fixture = str(RULES / "AX604.yaml")
+    _, slow, _ = run(fixture)
+    assert slow.count(" warning AX604 ") == 2
+    assert "2 m/s horizontal, 1 m/s vertical, 2 m/s² (default world)" in slow
+    code, fast, _ = run(fixture, "--world", str(FIXTURES / "worlds" / "fast.yaml"))
+    assert code == 0
+    assert " AX604 " not in fast  # 141 m at 10 m/s and 100 m at 5 m/s fit in 30 s
+
+
+def test_an_unreadable_world_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    world = tmp_path / "world.yaml"
+    world.write_text("vehicle:\n  max_horizontal_speed: fast\n", encoding="utf-8")
+    assert_one_line_error(*run(str(RULES / "AX604.yaml"), "-w", str(world)), f"{world}:2:")

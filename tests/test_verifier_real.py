@@ -244,4 +244,4 @@ def test_appendix_c_mission_against_the_default_catalog_leaves_attention_running
         ("return", ""),
     ]
     assert finding.path[4].line == landing + 1
-    assert "when the mission ends at line" in finding.message
+    assert "still running when the mission ends" in finding.message

@@ -20,9 +20,13 @@ HELP = """Check behavior catalogs and mission scripts offline, before they fly.
 Every catalog is read leniently (all problems reported, not just the first) and
 checked by the rules of the registry: dangling references, capability conflicts that
 stop behaviors or initiation, one-sided incompatibilities, start-order cycles,
-recurrent/timeout contradictions, dead lists and capabilities. Mission scripts given
-with --mission are read with Python's ast (never run); every execute, activate and
-inhibit call with literal arguments is checked against each catalog. An input that
+recurrent/timeout contradictions, targets the vehicle cannot reach in time, dead lists
+and capabilities. Aerostack 4.x task catalogs (2020-2021) are read into their own
+model and judged as the 2021 task coordinator would. Mission scripts given with
+--mission are read with Python's ast (never run): constants, loops over names, helper
+functions and API aliases are folded, every call is checked against each behavior
+catalog, and the calls are run as sequences, path by path, in the executive (preempted
+inhibits, capability conflicts, flight state, behaviors left running). An input that
 cannot be read is reported (one line on stderr, and in the json/sarif/github output)
 and the others are verified all the same; the exit code is then 2.
 
@@ -30,6 +34,8 @@ and the others are verified all the same; the exit code is then 2.
 Examples:
   aeroexec verify catalog/default.yaml
   aeroexec verify catalog/*.yaml --mission 'missions/*.py' --witness
+  aeroexec verify config/mission/behavior_catalog.yaml   # a 2020-2021 task catalog
+  aeroexec verify catalog/default.yaml -m mission.py --world worlds/field.yaml
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
   aeroexec verify --explain AX304
 

@@ -584,8 +584,8 @@ class MissionRun:
             self.report(
                 RECURRENT_LEFT_RUNNING,
                 W,
-                f"{name} (recurrent) is still running when the mission ends at line "
-                f"{end.line}: nothing inhibits it on this path",
+                f"{name} (recurrent) is still running when the mission ends: nothing "
+                "inhibits it on this path",
                 started,
                 state,
                 name,

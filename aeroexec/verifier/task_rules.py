@@ -14,11 +14,10 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 from functools import cached_property
 
-import networkx as nx
-
 from aeroexec.catalog.model import Severity
 from aeroexec.catalog.tasks import ExecutionGoal, TaskBehavior, TaskCatalog
 from aeroexec.errors import Mark
+from aeroexec.verifier.digraph import Digraph, cyclic_components, shortest_cycle
 from aeroexec.verifier.findings import Finding, Outcome, Step, Witness
 from aeroexec.verifier.registry import task_rule
 from aeroexec.verifier.suggest import Suggester
@@ -81,15 +80,17 @@ class TaskContext:
                 yield behavior, index
 
     @cached_property
-    def requirement_graph(self) -> nx.DiGraph:
-        """Task -> task it needs (through any behavior performing it)."""
-        graph = nx.DiGraph()
+    def requirement_graph(self) -> Digraph[str]:
+        """Task -> task it needs (through any behavior performing it); each edge keeps
+        the first (behavior, requirement) that imposes it."""
+        graph: Digraph[str] = Digraph()
         for behavior in self.catalog.behaviors:
             if behavior.task is None:
                 continue
             graph.add_node(behavior.task)
             for requirement in behavior.requires:
-                graph.add_edge(behavior.task, requirement.task, by=behavior, req=requirement)
+                if not graph.has_edge(behavior.task, requirement.task):
+                    graph.add_edge(behavior.task, requirement.task, requirement)
         return graph
 
 
@@ -356,28 +357,17 @@ def requirement_on_request_only(ctx: TaskContext) -> Iterator[Finding]:
 def requirement_cycle(ctx: TaskContext) -> Iterator[Finding]:
     graph = ctx.requirement_graph
     order = {name: i for i, name in enumerate(ctx.catalog.tasks)}
-    components = [
-        scc
-        for scc in nx.strongly_connected_components(graph)
-        if len(scc) > 1 or graph.has_edge(next(iter(scc)), next(iter(scc)))
-    ]
+    components = cyclic_components(graph)
     components.sort(key=lambda c: min(order.get(t, len(order)) for t in c))
     for component in components:
-        start = min(component, key=lambda t: order.get(t, len(order)))
-        cycle = [start]
-        sub = graph.subgraph(component)
-        paths = nx.single_source_shortest_path(sub, start)
-        back = min(
-            (paths[p] for p in sub.predecessors(start) if p in paths), key=len, default=[start]
-        )
-        cycle = [*back, start]
-        first = graph.edges[cycle[0], cycle[1]]
+        cycle = shortest_cycle(graph, component, lambda t: order.get(t, len(order)))
+        first = graph.edge(cycle[0], cycle[1])
         yield ctx.finding(
             "AX819",
             E,
             f"tasks require each other in a cycle: {' -> '.join(cycle)}; the coordinator's "
             "task ordering never ends on it (it hangs loading the catalog)",
-            first["req"].mark,
+            first.mark,
             sorted(component, key=lambda t: order.get(t, len(order))),
         )
 

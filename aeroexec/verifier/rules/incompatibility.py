@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-import networkx as nx
-
 from aeroexec.catalog.model import Severity
+from aeroexec.verifier.digraph import cyclic_components
 from aeroexec.verifier.findings import Finding, Witness
 from aeroexec.verifier.graphs import CatalogGraphs, cycle_edges, shortest_cycle
 from aeroexec.verifier.registry import catalog_rule
@@ -167,11 +166,11 @@ def _witness(graphs: CatalogGraphs, pairs: list[tuple[str, str]]) -> Witness | N
     or break the cycle.""",
 )
 def asymmetric_incompatibility_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    graph = graphs.asymmetric_preemption_graph
-    if graph.number_of_edges() == 0:
+    graph = graphs.asymmetric_preemption_digraph
+    if not graph.succ:
         return
     order = graphs.catalog.order_of
-    components = [c for c in nx.strongly_connected_components(graph) if len(c) > 1]
+    components = [c for c in cyclic_components(graph) if len(c) > 1]
     components.sort(key=lambda c: min(order(n) for n in c))
     for component in components:
         cycle = shortest_cycle(graph, component, order)
