@@ -137,7 +137,7 @@ def cyclic_components(graph: Digraph[N]) -> list[set[N]]:
 
 
 def descendants(graph: Digraph[N], start: N) -> set[N]:
-    """Every node reachable from `start` (without it, unless on a cycle through it)."""
+    """Every node reachable from `start`, without `start` itself (as networkx says)."""
     seen: set[N] = set()
     queue = deque(graph.successors(start))
     while queue:
@@ -146,6 +146,7 @@ def descendants(graph: Digraph[N], start: N) -> set[N]:
             continue
         seen.add(node)
         queue.extend(graph.successors(node))
+    seen.discard(start)
     return seen
 
 
