@@ -259,3 +259,30 @@ def test_deep_but_parsable_expressions_stay_within_the_folder_bounds() -> None:
     assert call.behavior is None  # too deep to fold: counted as not checked
     with pytest.raises(MissionError):
         parse_mission("x = " + "(" * 300 + ")" * 300, "parens.py")
+
+
+def test_a_raise_in_a_helper_ends_the_mission_on_that_path() -> None:
+    found = mission_findings(
+        """\
+        import executive_engine_api as api
+
+
+        def check(ok):
+            if not ok:
+                raise RuntimeError('abort')
+
+
+        def runMission():
+            api.activateBehavior('PAY_ATTENTION_TO_VISUAL_MARKERS')
+            ok, _ = api.consultBelief('ready(self)')
+            check(ok)
+            api.executeBehavior('GO_TO_POINT', coordinates=[1, 0, 1])
+        """
+    )
+    # The aborted path reaches neither GO_TO_POINT nor the end: the findings come from
+    # the path where the helper returns (its `else`, line 5).
+    expected = [(10, "activate"), (5, "else"), (13, "execute")]
+    [flight] = [f for f in found if f.rule == "AX711"]
+    assert [(s.line, s.action) for s in flight.path] == expected
+    [left] = [f for f in found if f.rule == "AX712"]
+    assert [(s.line, s.action) for s in left.path] == expected

@@ -316,8 +316,11 @@ class MissionRun:
                 current = self.loop(node, current, ends)
             elif isinstance(node, Inline):
                 sub = self.explore(node.body, current)
+                # A helper's return comes back here; a raise ends the mission.
+                ends.returns.extend(s for s in sub.returns if s.raised)
+                returned = [s for s in sub.returns if not s.raised]
                 current = self.merge(
-                    [*sub.normal, *sub.returns, *sub.breaks, *sub.continues],
+                    [*sub.normal, *returned, *sub.breaks, *sub.continues],
                     f"line {node.mark.line}",
                 )
             elif isinstance(node, Jump):
