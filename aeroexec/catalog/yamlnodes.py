@@ -132,17 +132,6 @@ class _Open:
         self.duplicates: list[tuple[str, Mark]] = []
         self.key: YNode | None = None  # a mapping's key, waiting for its value
 
-    def set(self, node: YNode) -> None:
-        """The value of the pending key."""
-        key = self.key
-        assert key is not None and isinstance(self.items, dict)
-        name = str(key.value)
-        if name in self.items:
-            self.duplicates.append((name, key.mark))
-        self.items[name] = node
-        self.key_marks[name] = key.mark
-        self.key = None
-
     def close(self) -> YNode:
         if not self.mapping:
             return YNode(self.items, self.mark)
@@ -191,6 +180,7 @@ class _Builder:
         get_event = self.loader.get_event
         file = self.file
         scalar_event, alias_event = yaml.ScalarEvent, yaml.AliasEvent
+        mapping_start = yaml.MappingStartEvent
         end_events = (yaml.SequenceEndEvent, yaml.MappingEndEvent)
         scalars = self.scalars
         # PyYAML keys its implicit type resolvers (bool, int, float, null...) by the
@@ -242,18 +232,23 @@ class _Builder:
                 # the anchor (the nodes inside a collection keep their own marks).
                 node = YNode(found.value, mark, found.key_marks, found.duplicate_keys, found.raw)
             else:  # SequenceStartEvent / MappingStartEvent
-                mapping = isinstance(event, yaml.MappingStartEvent)
-                mark = _mark(file, event.start_mark)
-                self.spend(1, mark)
-                self.collection_tag(event, mapping, mark)
+                mapping = kind is mapping_start
+                start = event.start_mark
+                mark = Mark(file, start.line + 1, start.column + 1)
+                self.budget -= 1
+                if self.budget < 0:
+                    self.spend(0, mark)
+                if event.tag is not None:  # an untagged collection is a map or a seq
+                    self.collection_tag(event, mapping, mark)
                 if stack and stack[-1].key is None and stack[-1].mapping:
                     raise CatalogError("a mapping key must be a scalar", mark)
                 if len(stack) >= MAX_DEPTH:
                     raise CatalogError(f"nested more than {MAX_DEPTH} levels deep", mark)
-                self.check_anchor(event.anchor, mark)
-                if event.anchor is not None:
-                    self.open_anchors.add(event.anchor)
-                stack.append(_Open(mark, event.anchor, mapping))
+                anchor = event.anchor
+                if anchor is not None:
+                    self.check_anchor(anchor, mark)
+                    self.open_anchors.add(anchor)
+                stack.append(_Open(mark, anchor, mapping))
                 continue
             if not stack:
                 return node
@@ -266,7 +261,14 @@ class _Builder:
                     raise CatalogError("a mapping key must be a scalar", node.mark)
                 parent.key = node
             else:
-                parent.set(node)
+                key_node = parent.key
+                name = str(key_node.value)
+                items = parent.items
+                if name in items:
+                    parent.duplicates.append((name, key_node.mark))
+                items[name] = node  # type: ignore[call-overload]
+                parent.key_marks[name] = key_node.mark
+                parent.key = None
 
     def alias(self, event: Any) -> tuple[YNode, int]:
         mark = _mark(self.file, event.start_mark)
