@@ -24,14 +24,16 @@ from aeroexec.executive.behavior import FlightState
 from aeroexec.mission import SessionConfig, simulate
 from aeroexec.vehicles.base import VehicleState
 from aeroexec.vehicles.null import NullVehicle
-from aeroexec.verifier import check_mission, parse_mission
+from aeroexec.verifier import Finding, check_mission, parse_mission
 
 MISSIONS = Path(__file__).resolve().parent / "fixtures" / "verifier" / "missions"
 SEQUENCE_CATALOG = MISSIONS / "sequence_catalog.yaml"
 runner = CliRunner()
 
 
-def mission_findings(text: str, catalog: Path = SEQUENCE_CATALOG, rule: str | None = None):
+def mission_findings(
+    text: str, catalog: Path = SEQUENCE_CATALOG, rule: str | None = None
+) -> list[Finding]:
     script = parse_mission(textwrap.dedent(text), "m.py")
     found = check_mission(script, read_catalog(catalog))
     return [f for f in found if rule is None or f.rule == rule]

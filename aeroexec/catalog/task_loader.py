@@ -72,13 +72,15 @@ class _TaskReader:
         self.used_2021: list[tuple[str, Mark]] = []
 
     # -- reporting -----------------------------------------------------------------------
-    def report(self, code: str, severity: Severity, message: str, mark: Mark, *subjects: str):
+    def report(
+        self, code: str, severity: Severity, message: str, mark: Mark, *subjects: str
+    ) -> None:
         self.diagnostics.append(Diagnostic(code, severity, message, mark, tuple(subjects)))
 
     def error(self, code: str, message: str, mark: Mark, *subjects: str) -> None:
         self.report(code, Severity.ERROR, message, mark, *subjects)
 
-    def check_keys(self, node: YNode, known: tuple[str, ...], where: str, *subjects: str):
+    def check_keys(self, node: YNode, known: tuple[str, ...], where: str, *subjects: str) -> None:
         for key, mark in node.key_marks.items():
             if key in VOCABULARY_2020 and key in known:
                 self.used_2020.append((key, mark))
