@@ -288,3 +288,13 @@ def test_a_raise_in_a_helper_ends_the_mission_on_that_path() -> None:
     assert [(s.line, s.action) for s in flight.path] == expected
     [left] = [f for f in found if f.rule == "AX712"]
     assert [(s.line, s.action) for s in left.path] == expected
+
+
+def test_folding_never_builds_huge_constants() -> None:
+    script = parse_mission(
+        "import executive_engine_api as api\n\ndef runMission():\n"
+        "    name = 'X' * 10**9\n    api.executeBehavior(name)\n"
+        "    api.executeBehavior(['A'] * 100000)\n",
+        "huge.py",
+    )
+    assert [c.behavior for c in script.calls] == [None, None]

@@ -189,12 +189,19 @@ def is_known(value: Any) -> bool:
 
 
 def _constant_result(function: Callable[..., Any], *args: Any) -> Any:
+    repeats = any(isinstance(a, int) and not isinstance(a, bool) and abs(a) > 10_000 for a in args)
+    if (
+        function is operator.mul
+        and repeats
+        and any(isinstance(a, (str, list, tuple)) for a in args)
+    ):
+        return UNKNOWN  # `'x' * 10**9` must never be built, and no behavior name needs it
     try:
         result = function(*args)
     except Exception:  # a TypeError of mixed types, a ZeroDivisionError...
         return UNKNOWN
-    if isinstance(result, str) and len(result) > 10_000:
-        return UNKNOWN  # `'x' * 10**9` must not be built
+    if isinstance(result, (str, list, tuple)) and len(result) > 10_000:
+        return UNKNOWN
     return result if is_known(result) else UNKNOWN
 
 

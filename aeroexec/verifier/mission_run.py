@@ -33,6 +33,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from aeroexec import interrupts
 from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.catalog.model import Catalog, Severity
 from aeroexec.errors import Mark
@@ -218,6 +219,7 @@ class MissionRun:
 
     def send(self, executive: Executive, call: MissionCall) -> ServiceResult | None:
         """What the mission API would do with the call; None when it sends nothing."""
+        interrupts.check()  # a safe point: a long abstract run stops on Ctrl-C
         self.sends += 1
         name = call.behavior
         descriptor = self.catalog.behaviors.get(name) if name is not None else None
