@@ -1,29 +1,50 @@
-"""Benchmark: `aeroexec verify` on a large generated catalog vs PyYAML parsing it.
+"""Benchmark: `aeroexec verify` on large generated catalogs vs PyYAML parsing them.
 
-Generates a 10,000-behavior / 1,000-list / 2,000-capability catalog (thesis dialect,
-with a sprinkling of real defects so that rules have something to report), then times
+Generates catalogs of 1,000 / 10,000 / 30,000 behaviors (a list per 10 behaviors, a
+capability per 5; thesis dialect, with a sprinkling of real defects so that rules have
+something to report), then measures
 
-* PyYAML alone: `yaml.load(text, Loader=yaml.CSafeLoader)`;
-* `aeroexec.verifier.verify_catalog_file(path)`: lenient load with marks + every rule.
+* whole process, CPU time of the child (user + system; wall time is shown too),
+  median of `--repeat` runs, each a fresh interpreter:
+  - the floor: `python -c "import gc; gc.disable(); import yaml; yaml.load(text,
+    Loader=yaml.CSafeLoader)"` — PyYAML's C loader with the cyclic collector off, the
+    least any Python program that reads the YAML can take;
+  - PyYAML as people run it (collector on), for reference;
+  - `python -m aeroexec verify CATALOG` (interpreter start, imports, lenient load with
+    marks, every rule);
+* in process, CPU time (`time.process_time`, less disturbed by other processes than
+  wall time), median of `--repeat` runs: the load, and each rule in registry order —
+  each rule's time includes the shared indexes it is the first to need, which is what
+  adding it costs — with microseconds per behavior at each size and the growth from
+  10k to 30k (3.0 is linear).
 
-Target (design.md section 10): verify <= 3x the PyYAML parse time. Prints both figures,
-the ratio and the target; exits 1 when the target is missed.
+Target (issue 15): verify(30k) <= 2x the whole-process floor, and every rule linear.
+Prints one line per figure (figure, baseline, ratio, target); exits 1 when the target
+is missed. Machines shared with others make every figure noisy: medians, and say so.
 
-    .venv/bin/python benchmarks/verify.py [--behaviors 10000] [--repeat 3]
+    .venv/bin/python benchmarks/verify.py [--sizes 1000,10000,30000] [--repeat 3]
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import random
+import resource
+import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import yaml
-
-TARGET_RATIO = 3.0
+TARGET_RATIO = 2.0
+#: Growth of a rule's time from 10k to 30k behaviors above which it is not called linear
+#: (3.0 is exactly linear; the margin covers cache effects and noise on a shared machine).
+LINEAR_GROWTH = 4.5
+#: Rules faster than this at the largest size (1 % of verify there) are not judged for
+#: growth: their time is noise, and memory effects (trivially linear rules grow 4x too).
+NOISE_FLOOR_S = 0.05
 
 
 def generate_catalog(
@@ -108,50 +129,132 @@ def generate_catalog(
     return "\n".join(out)
 
 
-def _best(times: list[float]) -> float:
-    return min(times)
+# -- whole process -------------------------------------------------------------------------
+def _whole(command: list[str], repeat: int) -> tuple[float, float]:
+    """Median (CPU seconds, wall seconds) of a fresh process running `command`. CPU time
+    (user + system of the child) is what the target is judged on: other jobs on the
+    machine stretch wall time, not the work done."""
+    cpu_times, wall_times = [], []
+    for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+        wall_times.append(time.perf_counter() - start)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu_times.append((after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
+    return statistics.median(cpu_times), statistics.median(wall_times)
 
 
-def run(behaviors: int, lists: int, capabilities: int, repeat: int) -> int:
-    from aeroexec.verifier import verify_catalog_file
+def _pyyaml(path: Path, collector: bool) -> list[str]:
+    pause = "" if collector else "import gc; gc.disable(); "
+    code = f"{pause}import yaml; yaml.load(open({str(path)!r}).read(), Loader=yaml.CSafeLoader)"
+    return [sys.executable, "-c", code]
 
-    text = generate_catalog(behaviors, lists, capabilities)
+
+def _verify(path: Path) -> list[str]:
+    return [sys.executable, "-m", "aeroexec", "verify", str(path)]
+
+
+# -- in process ----------------------------------------------------------------------------
+def _rule_times(text: str) -> dict[str, float]:
+    """CPU seconds of the load and of each rule (registry order) for one catalog."""
+    from aeroexec.catalog.loader import parse_catalog
+    from aeroexec.gc_pause import paused_gc
+    from aeroexec.verifier.graphs import CatalogGraphs
+    from aeroexec.verifier.registry import catalog_checks
+
+    times: dict[str, float] = {}
+    gc.collect()
+    with paused_gc():
+        start = time.process_time()
+        catalog = parse_catalog(text, "bench.yaml")
+        times["load"] = time.process_time() - start
+        graphs = CatalogGraphs(catalog)
+        for rule in catalog_checks():
+            assert rule.check is not None
+            start = time.process_time()
+            for _ in rule.check(graphs):
+                pass
+            times[rule.code] = time.process_time() - start
+    return times
+
+
+def run(sizes: list[int], repeat: int) -> int:
+    ok = True
+    per_size: dict[int, dict[str, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "big.yaml"
-        path.write_text(text, encoding="utf-8")
-        parse_times: list[float] = []
-        verify_times: list[float] = []
-        findings = 0
-        for _ in range(repeat):
-            start = time.perf_counter()
-            yaml.load(path.read_text(encoding="utf-8"), Loader=yaml.CSafeLoader)
-            parse_times.append(time.perf_counter() - start)
-            start = time.perf_counter()
-            report = verify_catalog_file(path)
-            verify_times.append(time.perf_counter() - start)
-            findings = len(report.findings)
-    parse, verify = _best(parse_times), _best(verify_times)
-    ratio = verify / parse
-    size = len(text.encode()) / 1e6
+        for size in sizes:
+            text = generate_catalog(size, max(1, size // 10), max(1, size // 5))
+            path = Path(tmp) / f"catalog_{size}.yaml"
+            path.write_text(text, encoding="utf-8")
+            runs = [_rule_times(text) for _ in range(repeat)]
+            per_size[size] = {key: statistics.median(r[key] for r in runs) for key in runs[0]}
+            floor, floor_wall = _whole(_pyyaml(path, collector=False), repeat)
+            usual, _ = _whole(_pyyaml(path, collector=True), repeat)
+            verified, verified_wall = _whole(_verify(path), repeat)
+            ratio = verified / floor
+            mb = len(text.encode()) / 1e6
+            judged = size == max(sizes)
+            verdict = ""
+            if judged:
+                met = ratio <= TARGET_RATIO
+                ok &= met
+                verdict = f"; target <= {TARGET_RATIO:g}x: {'met' if met else 'MISSED'}"
+            print(
+                f"{size:>6} behaviors ({mb:.1f} MB): verify whole process {verified:.2f} s CPU; "
+                f"baseline PyYAML C loader, collector off {floor:.2f} s CPU; ratio "
+                f"{ratio:.2f}x{verdict} (wall {verified_wall:.2f} s vs {floor_wall:.2f} s; "
+                f"PyYAML with its collector on: {usual:.2f} s CPU, ratio {verified / usual:.2f}x)"
+            )
+    print()
+    print("in process, CPU seconds (median); us per behavior; growth from the previous size")
+    codes = list(per_size[sizes[0]])
+    header = "".join(f"{size:>22}" for size in sizes)
+    print(f"{'step':<6}{header}")
+    for code in codes:
+        cells = []
+        previous: tuple[int, float] | None = None
+        growth_bad = False
+        for size in sizes:
+            seconds = per_size[size][code]
+            cell = f"{seconds:7.3f}s {seconds / size * 1e6:6.1f}us"
+            if previous is not None and previous[1] > 0:
+                growth = seconds / previous[1]
+                cell += f" x{growth:4.1f}"
+                expected = size / previous[0]
+                # Judged between the two largest sizes only: at 1,000 behaviors most
+                # rules take less than a millisecond, and their growth is noise.
+                judged_step = size == sizes[-1]
+                if (
+                    judged_step
+                    and seconds > NOISE_FLOOR_S
+                    and growth > expected * LINEAR_GROWTH / 3
+                ):
+                    growth_bad = True
+            else:
+                cell += "      "
+            previous = (size, seconds)
+            cells.append(f"{cell:>22}")
+        flag = "  NOT LINEAR" if growth_bad else ""
+        print(f"{code:<6}{''.join(cells)}{flag}")
+        if growth_bad and code != "load":
+            ok = False
+    totals = [sum(v for k, v in per_size[s].items() if k != "load") for s in sizes]
+    print(f"{'rules':<6}" + "".join(f"{t:21.3f}s" for t in totals))
     print(
-        f"catalog: {behaviors} behaviors, {lists} lists, {capabilities} capabilities "
-        f"({size:.1f} MB), {findings} findings"
+        "note: measured on a machine shared with other jobs; figures are medians and "
+        "still noisy (wall time more than CPU time)."
     )
-    print(f"PyYAML parse (CSafeLoader): {parse:.3f} s")
-    print(f"aeroexec verify:            {verify:.3f} s")
-    verdict = "met" if ratio <= TARGET_RATIO else "MISSED"
-    print(f"ratio: {ratio:.2f}x (target <= {TARGET_RATIO:g}x: {verdict})")
-    return 0 if ratio <= TARGET_RATIO else 1
+    return 0 if ok else 1
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--behaviors", type=int, default=10_000)
-    parser.add_argument("--lists", type=int, default=1_000)
-    parser.add_argument("--capabilities", type=int, default=2_000)
+    parser.add_argument("--sizes", default="1000,10000,30000")
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args(argv)
-    return run(args.behaviors, args.lists, args.capabilities, args.repeat)
+    sizes = [int(s) for s in args.sizes.split(",")]
+    return run(sizes, args.repeat)
 
 
 if __name__ == "__main__":

@@ -432,9 +432,62 @@ def test_written_dependency_tags_give_no_info() -> None:
     assert parse_catalog(emptied).behaviors["GO"].capabilities == ()
 
 
-def test_single_name_instead_of_a_list_is_accepted() -> None:
-    catalog = parse_catalog(BASE.replace("[moves]", "moves"))
+def test_single_name_instead_of_a_list_is_read_as_one_with_a_warning() -> None:
+    text = BASE.replace("[moves]", "moves")
+    catalog = parse_catalog(text)
     assert catalog.behaviors["GO"].incompatible_lists == ("moves",)
+    [warning] = only(catalog, codes.SCALAR_FOR_LIST)
+    assert warning.severity is Severity.WARNING
+    assert at(warning.mark) == where(text, "moves")
+    assert "iterated it as an empty list; write [moves]" in warning.message
+
+
+def test_boolean_words_are_symbols_the_mission_and_executive_accept() -> None:
+    text = SPEC.replace("{spec}", "        allowed_values: [ON, OFF]")
+    catalog = strict(parse_catalog(text))
+    behavior = catalog.behaviors["B"]
+    assert check_arguments(behavior, {"x": "on"}).values == {"X": "ON"}
+    assert check_arguments(behavior, {"X": True}).errors
+
+
+def test_reference_through_an_alias_is_marked_where_it_is_used() -> None:
+    text = doc(
+        """
+        behavior_descriptors:
+          - behavior: GO
+            timeout: 30
+            recurrent: no
+            incompatible_lists: [&typo mvoes]
+          - behavior: TURN
+            timeout: 30
+            recurrent: no
+            incompatible_lists: [*typo]
+        behavior_lists:
+          - list: moves
+            behaviors: [GO, TURN]
+        capability_descriptors: []
+        """
+    )
+    catalog = parse_catalog(text)
+    assert at(catalog.behaviors["TURN"].mark_of("incompatible_lists.0")) == where(text, "*typo")
+    assert at(catalog.behaviors["GO"].mark_of("incompatible_lists.0")) == where(text, "&typo")
+
+
+@pytest.mark.parametrize("value", [".inf", "1.0e+300", "1.0e+10"])
+def test_timeout_the_executive_cannot_arm_is_an_error(value: str) -> None:
+    text = BASE.replace("timeout: 30", f"timeout: {value}")
+    catalog = parse_catalog(text)
+    [error] = [d for d in catalog.diagnostics if d.severity is Severity.ERROR]
+    assert error.code == codes.WRONG_TYPE
+    assert at(error.mark) == where(text, value)
+    assert "at most 9.22e+09 s" in error.message
+    with pytest.raises(CatalogError):
+        strict(catalog)
+
+
+def test_longest_timeout_the_executive_arms_is_accepted() -> None:
+    catalog = strict(parse_catalog(BASE.replace("timeout: 30", "timeout: 9.2e+9")))
+    assert catalog.behaviors["GO"].timeout == 9.2e9
 
 
 # -- error tags ---------------------------------------------------------------------------
@@ -823,7 +876,7 @@ SPEC = doc(
         ),
         ("        allowed_values: [.nan, 1]", "[.nan", "NaN or too large"),
         ("        allowed_values: [0, " + "9" * 400 + "]", "[0,", "NaN or too large"),
-        ("        allowed_values: [true, false]", "[true", "allowed_values mixes numbers"),
+        ("        allowed_values: [1, ON]", "[1, ON]", "allowed_values mixes numbers and symbols"),
     ],
 )
 def test_malformed_argument_spec(spec: str, needle: str, message: str) -> None:
@@ -848,6 +901,9 @@ def test_malformed_argument_spec(spec: str, needle: str, message: str) -> None:
         ("        allowed_values: [3, 3]", ArgumentKind.RANGE, "a number in [3, 3]"),
         ("        allowed_values: [up, Down]", ArgumentKind.SYMBOLS, "one of up, Down"),
         ("        allowed_values: TEXT", ArgumentKind.TEXT, "text"),
+        # YAML 1.1 booleans stay words, as yaml-cpp's as<std::string>() reads them.
+        ("        allowed_values: [ON, OFF]", ArgumentKind.SYMBOLS, "one of ON, OFF"),
+        ("        allowed_values: [yes, no, true]", ArgumentKind.SYMBOLS, "one of yes, no, true"),
         (
             "        allowed_values: [-1, 1]\n        dimensions: 4",
             ArgumentKind.RANGE,

@@ -140,9 +140,10 @@ def test_json_shape() -> None:
     code, out, _ = run(str(RULES / "AX304.yaml"), "--format", "json", "--min-severity", "info")
     assert code == 1
     document = json.loads(out)
-    assert set(document) == {"findings", "summary"}
+    assert set(document) == {"findings", "summary", "inputErrors"}
+    assert document["inputErrors"] == []
     assert set(document["summary"]) == {"errors", "warnings", "infos"}
-    keys = {"rule", "severity", "message", "file", "line", "column", "subjects", "witness"}
+    keys = {"rule", "severity", "message", "file", "line", "column", "subjects", "witness", "path"}
     for finding in document["findings"]:
         assert set(finding) == keys
         assert finding["severity"] in ("error", "warning", "info")
@@ -259,14 +260,18 @@ def test_invalid_yaml(tmp_path: Path) -> None:
     assert_one_line_error(*run(str(bad)), f"{bad}:", "error: invalid YAML")
 
 
-def test_task_based_catalog_is_unreadable() -> None:
+def test_task_based_catalog_is_verified() -> None:
     task = (
         Path(__file__).resolve().parent
         / "fixtures"
         / "verifier_catalogs"
-        / "cvar-upm+aerostack__config_mission_behavior_catalog__abbd8b2.yaml"
+        / "cvar-upm+coordinator_cbc__behavior_coordinator_src_test_behavior_catalog_missing_task"
+        "__4edaaf8.yaml"
     )
-    assert_one_line_error(*run(str(task)), "task-based catalog")
+    code, out, err = run(str(task), "--witness")
+    assert (code, err) == (1, "")
+    assert f"{task}:111:11: error AX812 QUADROTOR_MPC_MOTION_CONTROL requires task " in out
+    assert "    witness: start task MPC_MOTION_CONTROL: the start of MPC_MOTION_CONTROL is " in out
 
 
 def test_mission_syntax_error(tmp_path: Path) -> None:
@@ -276,15 +281,18 @@ def test_mission_syntax_error(tmp_path: Path) -> None:
     column = text.index("angle:-90") + len("angle") + 1  # the ':' Python stops at
     code, out, err = run(str(THESIS_CATALOG), "--mission", str(mission))
     assert_one_line_error(
-        code, out, err, f"{mission}:5:{column}: error: not valid Python: invalid syntax"
+        code, "", err, f"{mission}:5:{column}: error: not valid Python: invalid syntax"
     )
+    # The catalog, which could be read, is verified all the same.
+    assert f"{THESIS_CATALOG}:116:25: error AX202" in out
+    assert out.strip().splitlines()[-1].endswith("not shown); 1 input could not be read")
 
 
 def test_mission_pattern_matching_nothing(tmp_path: Path) -> None:
     pattern = str(tmp_path / "*.py")
-    assert_one_line_error(
-        *run(str(THESIS_CATALOG), "--mission", pattern), "no mission file matches"
-    )
+    code, out, err = run(str(THESIS_CATALOG), "--mission", pattern)
+    assert_one_line_error(code, "", err, "no mission file matches")
+    assert " error AX202 " in out
 
 
 def test_unknown_format_and_severity() -> None:
@@ -322,3 +330,102 @@ def test_python_module_entry_point_prints_no_traceback(tmp_path: Path) -> None:
     assert result.stdout == ""
     assert len(result.stderr.strip().splitlines()) == 1
     assert "invalid YAML" in result.stderr
+
+
+# -- many inputs, one verdict (an unreadable input does not stop the others) ---------------
+def _glob_with_a_broken_catalog(tmp_path: Path) -> tuple[str, Path]:
+    for name in ("AX201.yaml", "AX203.yaml"):
+        shutil.copy(RULES / name, tmp_path / name)
+    broken = tmp_path / "AX202_broken.yaml"
+    broken.write_text("behavior_descriptors:\n  - behavior: [A\n", encoding="utf-8")
+    return str(tmp_path / "*.yaml"), broken
+
+
+def test_an_unreadable_catalog_in_a_glob_does_not_stop_the_others(tmp_path: Path) -> None:
+    pattern, broken = _glob_with_a_broken_catalog(tmp_path)
+    code, out, err = run(pattern)
+    assert code == 2
+    assert "AX201.yaml:5:33: error AX201" in out
+    assert "AX203.yaml:5:27: error AX203" in out
+    assert out.strip().splitlines()[-1].endswith("not shown); 1 input could not be read")
+    assert " in 2 files " in out
+    [line] = err.strip().splitlines()
+    assert line.startswith(f"{broken}:3:1: error: invalid YAML")
+
+
+def test_sarif_with_an_unreadable_input_is_valid_and_holds_the_other_results(
+    tmp_path: Path,
+) -> None:
+    pattern, _ = _glob_with_a_broken_catalog(tmp_path)
+    code, out, _ = run(pattern, "--format", "sarif")
+    assert code == 2
+    document = json.loads(out)
+    jsonschema.Draft4Validator(SCHEMA).validate(document)
+    [run_] = document["runs"]
+    [invocation] = run_["invocations"]
+    assert invocation["executionSuccessful"] is False
+    [notification] = invocation["toolExecutionNotifications"]
+    assert notification["level"] == "error"
+    assert notification["message"]["text"].startswith("invalid YAML")
+    location = notification["locations"][0]["physicalLocation"]
+    assert location["artifactLocation"]["uri"].endswith("AX202_broken.yaml")
+    assert location["region"] == {"startLine": 3, "startColumn": 1}
+    files = {
+        r["locations"][0]["physicalLocation"]["artifactLocation"]["uri"] for r in run_["results"]
+    }
+    assert {Path(f).name for f in files} == {"AX201.yaml", "AX203.yaml"}
+
+
+def test_github_reports_an_unreadable_input_as_an_error_annotation(tmp_path: Path) -> None:
+    pattern, broken = _glob_with_a_broken_catalog(tmp_path)
+    code, out, _ = run(pattern, "--format", "github")
+    assert code == 2
+    escaped = str(broken).replace(":", "%3A").replace(",", "%2C")
+    assert f"::error file={escaped},line=3,col=1,title=unreadable input::invalid YAML" in out
+    assert "title=AX201::" in out
+
+
+def test_sarif_rules_link_to_their_paragraph_of_the_docs() -> None:
+    _, out, _ = run(str(RULES / "AX304.yaml"), "--format", "sarif")
+    rules = json.loads(out)["runs"][0]["tool"]["driver"]["rules"]
+    docs = (ROOT / "docs" / "rules.md").read_text(encoding="utf-8")
+    for rule in rules:
+        uri = rule["helpUri"]
+        page, _, anchor = uri.partition("#")
+        assert page == (ROOT / "docs" / "rules.md").as_uri()
+        assert anchor == rule["id"].lower()
+        assert f"\n### {rule['id']}\n" in docs
+
+
+def test_sarif_fingerprints_are_unique_and_survive_line_shifts(tmp_path: Path) -> None:
+    catalog = tmp_path / "c.yaml"
+    text = (RULES / "AX202.yaml").read_text(encoding="utf-8")
+    catalog.write_text(text, encoding="utf-8")
+    results = json.loads(run(str(catalog), "--format", "sarif")[1])["runs"][0]["results"]
+    catalog.write_text("# moved\n\n" + text, encoding="utf-8")
+    shifted = json.loads(run(str(catalog), "--format", "sarif")[1])["runs"][0]["results"]
+    prints = [r["partialFingerprints"]["aeroexecFinding/v1"] for r in results]
+    assert len(set(prints)) == len(prints)
+    assert [r["partialFingerprints"] for r in shifted] == [
+        r["partialFingerprints"] for r in results
+    ]
+    lines = [r["locations"][0]["physicalLocation"]["region"]["startLine"] for r in results]
+    moved = [r["locations"][0]["physicalLocation"]["region"]["startLine"] for r in shifted]
+    assert moved == [line + 2 for line in lines]
+
+
+# -- the vehicle's limits come from the world description ----------------------------------
+def test_reach_checks_use_the_limits_of_the_world_given() -> None:
+    fixture = str(RULES / "AX604.yaml")
+    _, slow, _ = run(fixture)
+    assert slow.count(" warning AX604 ") == 2
+    assert "2 m/s horizontal, 1 m/s vertical, 2 m/s² (default world)" in slow
+    code, fast, _ = run(fixture, "--world", str(FIXTURES / "worlds" / "fast.yaml"))
+    assert code == 0
+    assert " AX604 " not in fast  # 141 m at 10 m/s and 100 m at 5 m/s fit in 30 s
+
+
+def test_an_unreadable_world_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    world = tmp_path / "world.yaml"
+    world.write_text("vehicle:\n  max_horizontal_speed: fast\n", encoding="utf-8")
+    assert_one_line_error(*run(str(RULES / "AX604.yaml"), "-w", str(world)), f"{world}:2:")

@@ -12,18 +12,21 @@ from pathlib import Path
 import pytest
 
 from aeroexec.catalog import read_catalog
+from aeroexec.catalog.formats import read_any_catalog
 from aeroexec.catalog.model import Severity
 from aeroexec.plugins import BehaviorSet, BehaviorSources, discover
-from aeroexec.verifier import Finding, Rule, all_rules, check_catalog, check_mission
+from aeroexec.verifier import Finding, Rule, all_rules, check_mission
+from aeroexec.verifier.engine import check_any_catalog
 from aeroexec.verifier.missions import read_mission
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "verifier"
 RULES = FIXTURES / "rules"
+TASKS = FIXTURES / "tasks"
 MISSIONS = FIXTURES / "missions"
 MISSION_CATALOG = MISSIONS / "catalog.yaml"
 CODE_BEHAVIORS = FIXTURES / "code_behaviors.py"
-#: Rules that fire on every catalog (the dialect note): they have no clean fixture.
-ALWAYS = {"AX109"}
+#: Rules that fire on every catalog (the dialect notes): they have no clean fixture.
+ALWAYS = {"AX109", "AX807"}
 
 EXPECT = re.compile(r"expect\s+(AX\d{3})(?:\s+at\s+(\S+))?")
 
@@ -47,9 +50,10 @@ def expectations(path: Path) -> dict[str, set[Place]]:
 def fixture_for(rule: Rule, clean: bool = False) -> Path:
     if rule.kind == "mission":
         return MISSIONS / f"{rule.code}{'.clean' if clean else ''}.py"
-    path = RULES / f"{rule.code}{'.clean' if clean else ''}.yaml"
+    folder = TASKS if rule.code.startswith("AX8") else RULES
+    path = folder / f"{rule.code}{'.clean' if clean else ''}.yaml"
     if clean and not path.exists():
-        return RULES / "clean.yaml"
+        return folder / "clean.yaml"
     return path
 
 
@@ -57,11 +61,19 @@ def code_behaviors() -> BehaviorSet:
     return discover(BehaviorSources(command_line=(str(CODE_BEHAVIORS),), entry_points=False))
 
 
+def mission_catalog(path: Path) -> Path:
+    """`# catalog: NAME` on a mission fixture's first line names its catalog."""
+    first = path.read_text(encoding="utf-8").splitlines()[0]
+    if first.startswith("# catalog:"):
+        return MISSIONS / first.removeprefix("# catalog:").split()[0]
+    return MISSION_CATALOG
+
+
 def findings_of(path: Path, rule: Rule | None = None) -> list[Finding]:
     if path.suffix == ".py":
-        return check_mission(read_mission(path), read_catalog(MISSION_CATALOG))
+        return check_mission(read_mission(path), read_catalog(mission_catalog(path)))
     behaviors = code_behaviors() if rule is not None and rule.kind == "code" else None
-    return check_catalog(read_catalog(path), behaviors=behaviors)
+    return check_any_catalog(read_any_catalog(path), behaviors=behaviors)
 
 
 def _ids(rule: Rule) -> str:
@@ -105,7 +117,13 @@ def test_the_shared_clean_catalog_has_nothing_above_info() -> None:
     assert {f.rule for f in findings} == {"AX109"}
 
 
+def test_the_clean_task_catalog_has_nothing_above_info() -> None:
+    findings = findings_of(TASKS / "clean.yaml")
+    assert [str(f) for f in findings if f.severity is not Severity.INFO] == []
+    assert {f.rule for f in findings} == {"AX807"}
+
+
 def test_every_fixture_belongs_to_a_registered_rule() -> None:
     codes = {rule.code for rule in all_rules()}
-    for path in [*RULES.glob("AX*"), *MISSIONS.glob("AX*")]:
+    for path in [*RULES.glob("AX*"), *MISSIONS.glob("AX*"), *TASKS.glob("AX*")]:
         assert path.name[:5] in codes, f"{path.name} names no registered rule"

@@ -14,7 +14,7 @@ from aeroexec.behaviors._support import (
     low_battery_reason,
     must_be_flying,
 )
-from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, Situation
+from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 
@@ -24,6 +24,8 @@ class TakeOff(MotionBehavior):
 
     name = "TAKE_OFF"
     argument_names = ()
+    needs = FlightState.LANDED
+    leaves = FlightState.FLYING
     altitude = 1.0
     tolerance = 0.05  # m
 
@@ -56,6 +58,8 @@ class Land(Behavior):
 
     name = "LAND"
     argument_names = ()
+    needs = FlightState.FLYING
+    leaves = FlightState.LANDED
     fails_on_faults = LINK_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

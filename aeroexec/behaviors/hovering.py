@@ -18,7 +18,7 @@ from aeroexec.behaviors._support import (
     low_battery_reason,
     must_be_flying,
 )
-from aeroexec.executive.behavior import ALLOWED, Finished, Situation
+from aeroexec.executive.behavior import ALLOWED, Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 
@@ -29,6 +29,7 @@ class KeepHovering(MotionBehavior):
 
     name = "KEEP_HOVERING"
     argument_names = ("DURATION", "ARUCO")
+    needs = FlightState.FLYING
     default_duration = 5.0
     fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
 
@@ -57,6 +58,7 @@ class StartHovering(MotionBehavior):
     name = "START_HOVERING"
     argument_names = ()
     fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
+    needs = FlightState.FLYING
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)
@@ -79,6 +81,7 @@ class Flip(MotionBehavior):
 
     name = "FLIP"
     argument_names = ("DIRECTION",)
+    needs = FlightState.FLYING
     min_altitude = 1.0  # m
     max_duration = 3.0  # s: a flip the vehicle has not finished by then went wrong
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 from aeroexec.behaviors._support import (
     MotionBehavior,
@@ -12,7 +12,7 @@ from aeroexec.behaviors._support import (
     fmt,
     must_be_flying,
 )
-from aeroexec.executive.behavior import ALLOWED, Finished, Situation
+from aeroexec.executive.behavior import ALLOWED, Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 from aeroexec.vehicles.base import Vec3
@@ -30,6 +30,14 @@ class GoToPoint(MotionBehavior):
 
     name = "GO_TO_POINT"
     argument_names = ("COORDINATES", "RELATIVE_COORDINATES")
+    needs = FlightState.FLYING
+    #: Arguments that are destinations, absolute or relative to where the behavior
+    #: starts: the verifier checks that they can be reached within the timeout at the
+    #: vehicle's speed limits.
+    destinations: ClassVar[Mapping[str, str]] = {
+        "COORDINATES": "absolute",
+        "RELATIVE_COORDINATES": "relative",
+    }
     #: Reached = within `tolerance` and nearly stopped. 5 cm: close enough that a point
     #: memorized right after arriving is the point asked for; loose enough for a real
     #: autopilot's position hold.
@@ -90,6 +98,7 @@ class StartMoving(MotionBehavior):
 
     name = "START_MOVING"
     argument_names = ("SPEED", "DIRECTION")
+    needs = FlightState.FLYING
     tolerance = 0.1  # m/s
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
@@ -129,6 +138,7 @@ class FollowObjectImage(MotionBehavior):
 
     name = "FOLLOW_OBJECT_IMAGE"
     argument_names = ()
+    needs = FlightState.FLYING
     reach = 1.0  # m
     lost_after = 2.0  # s out of sight
 

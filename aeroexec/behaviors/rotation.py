@@ -12,7 +12,7 @@ from aeroexec.behaviors._support import (
     angle_error_degrees,
     must_be_flying,
 )
-from aeroexec.executive.behavior import Finished, Situation
+from aeroexec.executive.behavior import Finished, FlightState, Situation
 from aeroexec.executive.beliefs import Beliefs
 from aeroexec.executive.messages import EventCode
 
@@ -24,6 +24,7 @@ class Rotate(MotionBehavior):
 
     name = "ROTATE"
     argument_names = ("ANGLE",)
+    needs = FlightState.FLYING
     tolerance = 1.0  # degrees
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

@@ -15,6 +15,7 @@ DUPLICATE_KEY = "AX107"
 MALFORMED_ARGUMENT = "AX108"
 DIALECT = "AX109"
 IGNORED_SECTION = "AX110"
+SCALAR_FOR_LIST = "AX111"
 
 LOADER_DOCS: dict[str, tuple[str, str]] = {
     MISSING_ERROR_TAG: (
@@ -76,5 +77,14 @@ LOADER_DOCS: dict[str, tuple[str, str]] = {
         "ignored-section",
         "A section aeroexec reads but does not act on (e.g. the 2017 `reactive_activation` "
         "block). Informational: it has no effect on the executive.",
+    ),
+    SCALAR_FOR_LIST: (
+        "scalar-for-list",
+        "A reference list (`incompatible_lists`, `capabilities`, a list's `behaviors`, "
+        "`processes`...) is written as a single name (`incompatible_lists: motion`, as "
+        "the Aerostack 2.0 wiki shows it). aeroexec reads it as a one-name list, but "
+        "Aerostack's C++ loaders (yaml-cpp) iterate a scalar as an empty list. In "
+        "flight: on Aerostack the behavior preempted nothing through it; the catalog "
+        "means different things to the two executives. Fix: write a list, `[motion]`.",
     ),
 }

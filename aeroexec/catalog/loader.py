@@ -18,6 +18,7 @@ from typing import Any
 from aeroexec.catalog import codes
 from aeroexec.catalog.model import (
     DEFAULT_TIMEOUT_S,
+    MAX_TIMEOUT_S,
     ArgumentKind,
     ArgumentSpec,
     BehaviorDescriptor,
@@ -29,6 +30,7 @@ from aeroexec.catalog.model import (
 )
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import CatalogError, Mark
+from aeroexec.gc_pause import paused_gc
 from aeroexec.inputs import read_text
 
 TOP_LEVEL_TAGS = (
@@ -101,7 +103,11 @@ def strict(catalog: Catalog) -> Catalog:
 
 
 def parse_catalog(text: str, file: str = "<string>") -> Catalog:
-    root = load_yaml(text, file)
+    return parse_root(load_yaml(text, file), text, file)
+
+
+def parse_root(root: YNode | None, text: str, file: str) -> Catalog:
+    """A behavior catalog from its parsed YAML; `CatalogError` for another format."""
     if root is None:
         raise CatalogError("empty document: a catalog needs behavior_descriptors", Mark(file, 1, 1))
     if not root.is_map:
@@ -109,7 +115,8 @@ def parse_catalog(text: str, file: str = "<string>") -> Catalog:
             f"a catalog is a mapping with behavior_descriptors, got a {_kind(root)}", root.mark
         )
     _refuse_other_formats(root)
-    return _CatalogReader(file, text).read(root)
+    with paused_gc():
+        return _CatalogReader(file, text).read(root)
 
 
 def _refuse_other_formats(root: YNode) -> None:
@@ -117,13 +124,22 @@ def _refuse_other_formats(root: YNode) -> None:
     if "behavior_descriptors" in keys:
         return
     if "behaviors" in keys and ({"tasks", "default_values", "exclusivity_constraints"} & keys):
+        # The executive is the 2017 coordinator (lists, capabilities, preemption); a
+        # task catalog needs the 2021 constraint-based assignment of behaviors to tasks,
+        # which it does not implement. `aeroexec verify` reads and checks task catalogs.
         raise CatalogError(
             "this is an Aerostack 4.x task-based catalog (behaviors/tasks/default_values, "
-            "2020-2021), not a behavior catalog; aeroexec reads the 2017 thesis format and "
-            "the Aerostack 2.x format (behavior_descriptors/behavior_lists/"
-            "capability_descriptors)",
+            "2020-2021), not a behavior catalog: aeroexec's executive runs the 2017 "
+            "behavior coordinator (the thesis and Aerostack 2.x formats: "
+            "behavior_descriptors/behavior_lists/capability_descriptors), not the 2021 "
+            "task coordinator; `aeroexec verify` checks task catalogs",
             root.mark,
         )
+
+
+def node_kind(node: YNode) -> str:
+    """`mapping`, `list`, `null` or `int (5)`: what a value is, for messages."""
+    return _kind(node)
 
 
 def _kind(node: YNode) -> str:
@@ -229,6 +245,16 @@ class _CatalogReader:
                 *subjects,
             )
             return ()
+        if not node.is_list:
+            self.report(
+                codes.SCALAR_FOR_LIST,
+                Severity.WARNING,
+                f"{what} is a single name, not a list: aeroexec reads it as "
+                f"[{node.value}], Aerostack's yaml-cpp loaders iterated it as an empty "
+                f"list; write [{node.value}]",
+                node.mark,
+                *subjects,
+            )
         result: list[tuple[str, Mark]] = []
         for item in items:
             name = self.name_of(item, f"an entry of {what}", *subjects)
@@ -249,8 +275,19 @@ class _CatalogReader:
 
     def seconds(self, node: YNode, what: str, *subjects: str) -> float | None:
         value = _as_float(node.value)
-        if value is not None and value > 0:
+        if value is not None and 0 < value <= MAX_TIMEOUT_S:
             return value
+        if value is not None and value > MAX_TIMEOUT_S:
+            # `.inf` and 1e300 pass "positive" but the executive's clock cannot arm
+            # them: the deadline in nanoseconds overflows.
+            problem = f"at most {MAX_TIMEOUT_S:.3g} s (the executive's clock counts int64 ns)"
+            self.error(
+                codes.WRONG_TYPE,
+                f"{what} must be {problem}, got {_kind(node)}",
+                node.mark,
+                *subjects,
+            )
+            return None
         self.error(
             codes.WRONG_TYPE,
             f"{what} must be a positive number of seconds, got {_kind(node)}",
@@ -526,7 +563,7 @@ class _CatalogReader:
                 f"got {_kind(allowed)}",
                 allowed.mark,
             )
-        values = [v.value for v in allowed.value]
+        values = [v.text for v in allowed.value]
         if all(_is_number(v) for v in values):
             if len(values) != 2:
                 return malformed(

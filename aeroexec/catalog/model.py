@@ -15,6 +15,9 @@ from enum import Enum
 from aeroexec.errors import Mark, one_line
 
 DEFAULT_TIMEOUT_S = 15.0
+#: The longest timeout the executive can arm: its clock counts nanoseconds in an int64
+#: (as ROS and MCAP time do), about 292 years. `.inf` or 1e300 would overflow it.
+MAX_TIMEOUT_S = (2**63 - 1) / 1e9
 #: The mark of entries built in code rather than read from a file.
 IN_MEMORY = Mark("<memory>")
 

@@ -16,12 +16,12 @@ run, so that:
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from typing import Any
 
 import yaml
 
 from aeroexec.errors import CatalogError, Mark
+from aeroexec.gc_pause import paused_gc
 
 try:  # The C parser is much faster on large catalogs; fall back when PyYAML lacks it.
     _Loader: type = yaml.CSafeLoader  # type: ignore[attr-defined]
@@ -44,14 +44,51 @@ DEFAULT_NODE_BUDGET = 5_000_000
 MAX_DEPTH = 200
 
 
-@dataclass(frozen=True, slots=True)
 class YNode:
-    """A YAML value with its mark. `value` is dict[str, YNode], list[YNode] or a scalar."""
+    """A YAML value with its mark. `value` is dict[str, YNode], list[YNode] or a scalar.
 
-    value: Any
-    mark: Mark
-    key_marks: dict[str, Mark] = field(default_factory=dict, compare=False)
-    duplicate_keys: tuple[tuple[str, Mark], ...] = ()
+    A plain slotted class rather than a frozen dataclass: a large catalog builds hundreds
+    of thousands of them, and a frozen dataclass's `__init__` costs four times as much.
+    Treat instances as immutable.
+    """
+
+    __slots__ = ("duplicate_keys", "key_marks", "mark", "raw", "value")
+
+    def __init__(
+        self,
+        value: Any,
+        mark: Mark,
+        key_marks: dict[str, Mark] | None = None,
+        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
+        raw: str | None = None,
+    ) -> None:
+        self.value = value
+        self.mark = mark
+        self.key_marks: dict[str, Mark] = {} if key_marks is None else key_marks
+        self.duplicate_keys = duplicate_keys
+        #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
+        #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and
+        #: compare them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
+        self.raw = raw
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, YNode):
+            return NotImplemented
+        return (self.value, self.mark, self.duplicate_keys) == (
+            other.value,
+            other.mark,
+            other.duplicate_keys,
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"YNode(value={self.value!r}, mark={self.mark!r})"
+
+    @property
+    def text(self) -> Any:
+        """The value as yaml-cpp's `as<std::string>()` sees a boolean: its own text."""
+        return self.raw if self.raw is not None else self.value
 
     @property
     def is_map(self) -> bool:
@@ -83,36 +120,20 @@ def _mark(file: str, mark: Any) -> Mark:
 class _Open:
     """A sequence or mapping whose end event has not arrived yet."""
 
-    __slots__ = ("anchor", "duplicates", "items", "key", "key_marks", "mark", "size")
+    __slots__ = ("anchor", "duplicates", "items", "key", "key_marks", "mapping", "mark", "size")
 
     def __init__(self, mark: Mark, anchor: str | None, mapping: bool) -> None:
         self.mark = mark
         self.anchor = anchor
         self.size = 1
+        self.mapping = mapping
         self.items: dict[str, YNode] | list[YNode] = {} if mapping else []
         self.key_marks: dict[str, Mark] = {}
         self.duplicates: list[tuple[str, Mark]] = []
         self.key: YNode | None = None  # a mapping's key, waiting for its value
 
-    def add(self, node: YNode, size: int) -> None:
-        self.size += size
-        if isinstance(self.items, list):
-            self.items.append(node)
-            return
-        if self.key is None:
-            if isinstance(node.value, (dict, list)):
-                raise CatalogError("a mapping key must be a scalar", node.mark)
-            self.key = node
-            return
-        name = str(self.key.value)
-        if name in self.items:
-            self.duplicates.append((name, self.key.mark))
-        self.items[name] = node
-        self.key_marks[name] = self.key.mark
-        self.key = None
-
     def close(self) -> YNode:
-        if isinstance(self.items, list):
+        if not self.mapping:
             return YNode(self.items, self.mark)
         return YNode(self.items, self.mark, self.key_marks, tuple(self.duplicates))
 
@@ -151,43 +172,103 @@ class _Builder:
         return root
 
     def node(self) -> YNode:
-        """Build the next node from the events, without recursion."""
-        loader = self.loader
+        """Build the next node from the events, without recursion.
+
+        The hot loop of loading a large catalog: one pass per event, so the common cases
+        (scalars, collection ends) are written out inline.
+        """
+        get_event = self.loader.get_event
+        file = self.file
+        scalar_event, alias_event = yaml.ScalarEvent, yaml.AliasEvent
+        mapping_start = yaml.MappingStartEvent
+        end_events = (yaml.SequenceEndEvent, yaml.MappingEndEvent)
+        scalars = self.scalars
+        # PyYAML keys its implicit type resolvers (bool, int, float, null...) by the
+        # first character of the text; a plain scalar starting with another one is a
+        # string, and needs neither the resolver nor the constructor.
+        implicit_resolvers = self.loader.yaml_implicit_resolvers
+        plain_words = None not in implicit_resolvers  # no resolver for every text
         stack: list[_Open] = []
         while True:
-            event = loader.get_event()
-            done: tuple[YNode, int] | None = None
-            if isinstance(event, yaml.AliasEvent):
-                done = self.alias(event)
-                self.spend(done[1], _mark(self.file, event.start_mark))
-            elif isinstance(event, yaml.ScalarEvent):
-                mark = _mark(self.file, event.start_mark)
-                self.spend(1, mark)
-                done = (YNode(self.scalar(event, mark), mark), 1)
-                self.remember(event.anchor, done)
-            elif isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
-                mapping = isinstance(event, yaml.MappingStartEvent)
-                mark = _mark(self.file, event.start_mark)
-                self.spend(1, mark)
-                self.collection_tag(event, mapping, mark)
-                if stack and stack[-1].key is None and isinstance(stack[-1].items, dict):
+            event = get_event()
+            kind = type(event)
+            if kind is scalar_event:
+                start = event.start_mark
+                mark = Mark(file, start.line + 1, start.column + 1)
+                self.budget -= 1
+                if self.budget < 0:
+                    self.spend(0, mark)
+                text = event.value
+                if (
+                    plain_words
+                    and event.tag is None
+                    and text
+                    and text[0] not in implicit_resolvers
+                    and event.implicit[0]
+                ):
+                    value = text  # a plain word no implicit type can start with: a str
+                else:
+                    key = (event.tag, text, event.implicit)
+                    value = scalars[key] if key in scalars else self.scalar(event, mark)
+                node = YNode(
+                    value, mark, None, (), event.value if value is True or value is False else None
+                )
+                size = 1
+                if event.anchor is not None:
+                    self.remember(event.anchor, (node, 1))
+            elif kind in end_events:
+                closed = stack.pop()
+                node = closed.close()
+                size = closed.size
+                if closed.anchor is not None:
+                    self.open_anchors.discard(closed.anchor)
+                    self.remember(closed.anchor, (node, size))
+            elif kind is alias_event:
+                start = event.start_mark
+                mark = Mark(file, start.line + 1, start.column + 1)
+                found, size = self.alias(event)
+                self.spend(size, mark)
+                # A reference through an alias is reported where it is used, not at
+                # the anchor (the nodes inside a collection keep their own marks).
+                node = YNode(found.value, mark, found.key_marks, found.duplicate_keys, found.raw)
+            else:  # SequenceStartEvent / MappingStartEvent
+                mapping = kind is mapping_start
+                start = event.start_mark
+                mark = Mark(file, start.line + 1, start.column + 1)
+                self.budget -= 1
+                if self.budget < 0:
+                    self.spend(0, mark)
+                if event.tag is not None:  # an untagged collection is a map or a seq
+                    self.collection_tag(event, mapping, mark)
+                if stack and stack[-1].key is None and stack[-1].mapping:
                     raise CatalogError("a mapping key must be a scalar", mark)
                 if len(stack) >= MAX_DEPTH:
                     raise CatalogError(f"nested more than {MAX_DEPTH} levels deep", mark)
-                self.check_anchor(event.anchor, mark)
-                if event.anchor is not None:
-                    self.open_anchors.add(event.anchor)
-                stack.append(_Open(mark, event.anchor, mapping))
+                anchor = event.anchor
+                if anchor is not None:
+                    self.check_anchor(anchor, mark)
+                    self.open_anchors.add(anchor)
+                stack.append(_Open(mark, anchor, mapping))
                 continue
-            else:  # SequenceEndEvent / MappingEndEvent
-                closed = stack.pop()
-                done = (closed.close(), closed.size)
-                if closed.anchor is not None:
-                    self.open_anchors.discard(closed.anchor)
-                    self.remember(closed.anchor, done)
             if not stack:
-                return done[0]
-            stack[-1].add(*done)
+                return node
+            parent = stack[-1]
+            parent.size += size
+            if not parent.mapping:
+                parent.items.append(node)  # type: ignore[union-attr]
+            elif parent.key is None:
+                if isinstance(node.value, (dict, list)):
+                    raise CatalogError("a mapping key must be a scalar", node.mark)
+                parent.key = node
+            else:
+                key_node = parent.key
+                name = str(key_node.value)
+                items = parent.items
+                if name in items:
+                    parent.duplicates.append((name, key_node.mark))
+                items[name] = node  # type: ignore[call-overload]
+                parent.key_marks[name] = key_node.mark
+                parent.key = None
 
     def alias(self, event: Any) -> tuple[YNode, int]:
         mark = _mark(self.file, event.start_mark)
@@ -274,7 +355,8 @@ def load_yaml(text: str, file: str, *, budget: int = DEFAULT_NODE_BUDGET) -> YNo
     loader = None
     try:
         loader = _Loader(text)  # the pure-Python reader checks characters here already
-        return _Builder(loader, file, budget).document()
+        with paused_gc():
+            return _Builder(loader, file, budget).document()
     except yaml.reader.ReaderError as exc:
         raise _reader_error(exc, text, file) from None
     except yaml.MarkedYAMLError as exc:

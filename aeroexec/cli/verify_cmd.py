@@ -8,10 +8,11 @@ import sys
 import typer
 
 from aeroexec.catalog.model import Severity
-from aeroexec.cli.app import app, guarded
-from aeroexec.cli.project import BehaviorsOption, project, project_behaviors
+from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.project import BehaviorsOption, first, project, project_behaviors
 from aeroexec.errors import AeroexecError
-from aeroexec.verifier import expand_catalog_paths, verify
+from aeroexec.vehicles.world import load_world
+from aeroexec.verifier import verify
 from aeroexec.verifier.registry import get, suggest_code
 from aeroexec.verifier.report import FORMATS, render
 
@@ -20,10 +21,15 @@ HELP = """Check behavior catalogs and mission scripts offline, before they fly.
 Every catalog is read leniently (all problems reported, not just the first) and
 checked by the rules of the registry: dangling references, capability conflicts that
 stop behaviors or initiation, one-sided incompatibilities, start-order cycles,
-recurrent/timeout contradictions, dead lists and capabilities. Mission scripts given
-with --mission are read with Python's ast (never run); every execute, activate and
-inhibit call with literal arguments is checked against each catalog. Every input is
-read before any check runs: an unreadable one stops the run with exit code 2.
+recurrent/timeout contradictions, targets the vehicle cannot reach in time, dead lists
+and capabilities. Aerostack 4.x task catalogs (2020-2021) are read into their own
+model and judged as the 2021 task coordinator would. Mission scripts given with
+--mission are read with Python's ast (never run): constants, loops over names, helper
+functions and API aliases are folded, every call is checked against each behavior
+catalog, and the calls are run as sequences, path by path, in the executive (preempted
+inhibits, capability conflicts, flight state, behaviors left running). An input that
+cannot be read is reported (one line on stderr, and in the json/sarif/github output)
+and the others are verified all the same; the exit code is then 2.
 
 When the project declares its behaviors (-b/--behaviors, `behaviors` in
 [tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
@@ -35,13 +41,15 @@ real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catal
 Examples:
   aeroexec verify catalog/default.yaml
   aeroexec verify catalog/*.yaml --mission 'missions/*.py' --witness
+  aeroexec verify config/mission/behavior_catalog.yaml   # a 2020-2021 task catalog
+  aeroexec verify catalog/default.yaml -m mission.py --world worlds/field.yaml
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
   aeroexec verify my-catalog.yaml -b mybehaviors
   aeroexec verify --explain AX304
 
 \b
 Exit codes: 0 no errors; 1 errors (or warnings with --strict);
-            2 an input could not be read (one line on stderr).
+            2 an input could not be read (one line each on stderr).
 """
 
 
@@ -68,6 +76,13 @@ def verify_command(
     ),
     output_format: str = typer.Option(
         "text", "--format", "-f", metavar="FORMAT", help="text, json, sarif or github."
+    ),
+    world: str | None = typer.Option(
+        None,
+        "--world",
+        "-w",
+        metavar="FILE",
+        help="World file whose vehicle limits the reach checks use (default: built-in).",
     ),
     strict: bool = typer.Option(False, "--strict", help="Exit 1 on warnings too."),
     witness: bool = typer.Option(
@@ -110,12 +125,14 @@ def verify_command(
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
     found = project_behaviors(behaviors, settings)
-    report = verify(
-        expand_catalog_paths(catalogs), mission, behaviors=found if found.declared else None
-    )
+    world_path = first(world, settings.world, None)
+    limits = load_world(world_path) if world_path is not None else None
+    report = verify(catalogs, mission, world=limits, behaviors=found if found.declared else None)
     shown = report.at_least(threshold)
     use_color = _use_color(color)
     text = render(shown, output_format, witness=witness, color=use_color)
     typer.echo(text, nl=False, color=use_color)
-    # The exit code counts every finding, shown or not.
+    for error in report.input_errors:
+        error_line(str(error))
+    # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))

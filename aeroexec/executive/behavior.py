@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from enum import Enum
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from aeroexec.executive.clock import NS_PER_S
@@ -53,6 +54,13 @@ class Situation:
 
 
 ALLOWED = Situation(True)
+
+
+class FlightState(str, Enum):
+    """A behavior's declared situation (see `Behavior.needs` and `Behavior.leaves`)."""
+
+    LANDED = "landed"
+    FLYING = "flying"
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +91,12 @@ class Behavior:
     #: catalog's `coordinates` reaches a behavior that reads `COORDINATES`), and the
     #: verifier checks them against the catalog (a catalog argument no code reads).
     argument_names: ClassVar[tuple[str, ...] | None] = None
+    #: Declared situation, a static summary of `check_situation` (read by the offline
+    #: verifier, which runs missions abstractly): the flight state the behavior needs
+    #: to start (None: either), and the one it leaves when it achieves its goal (None:
+    #: unchanged). `check_situation` stays the authority when the behavior runs.
+    needs: ClassVar[FlightState | None] = None
+    leaves: ClassVar[FlightState | None] = None
 
     # -- the author's hooks ------------------------------------------------------------
     def check_situation(self, beliefs: Beliefs) -> Situation:

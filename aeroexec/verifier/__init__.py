@@ -4,7 +4,12 @@
     report = verify(["catalog/default.yaml"], missions=["missions/*.py"])
     for finding in report.findings:
         print(finding)              # file:line:col: severity CODE message
-    report.exit_code(strict=False)  # 0 no errors, 1 errors
+    report.input_errors             # inputs that could not be read (the rest was verified)
+    report.exit_code(strict=False)  # 0 no errors, 1 errors, 2 an input unreadable
+
+Behavior catalogs (2017 thesis, Aerostack 2.x) and task catalogs (Aerostack 4.x,
+2020-2021) are both read (`aeroexec.catalog.formats`); missions are checked call by call
+and run as sequences in the executive (`missions`, `mission_fold`, `mission_run`).
 
 Rules are registered in `aeroexec.verifier.registry` (`all_rules()`, `get(code)`); each has a
 code, a severity and a one-paragraph doc. `docs/rules.md` is generated from it
@@ -12,13 +17,23 @@ code, a severity and a one-paragraph doc. `docs/rules.md` is generated from it
 """
 
 from aeroexec.verifier.engine import (
+    check_any_catalog,
     check_catalog,
+    check_task_catalog,
     expand_catalog_paths,
     verify,
     verify_catalog,
     verify_catalog_file,
 )
-from aeroexec.verifier.findings import Finding, Outcome, Report, Step, Witness
+from aeroexec.verifier.findings import (
+    Finding,
+    InputError,
+    Outcome,
+    PathStep,
+    Report,
+    Step,
+    Witness,
+)
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.missions import MissionScript, check_mission, parse_mission, read_mission
 from aeroexec.verifier.registry import Rule, all_rules, get
@@ -26,15 +41,19 @@ from aeroexec.verifier.registry import Rule, all_rules, get
 __all__ = [
     "CatalogGraphs",
     "Finding",
+    "InputError",
     "MissionScript",
     "Outcome",
+    "PathStep",
     "Report",
     "Rule",
     "Step",
     "Witness",
     "all_rules",
+    "check_any_catalog",
     "check_catalog",
     "check_mission",
+    "check_task_catalog",
     "expand_catalog_paths",
     "get",
     "parse_mission",

@@ -8,8 +8,38 @@
 from __future__ import annotations
 
 import sys
+from functools import cache
+from importlib import metadata
+from pathlib import Path
 
 from aeroexec.verifier.registry import AREAS, Rule, all_rules
+
+#: docs/rules.md of a source checkout (an editable install), next to the package.
+_LOCAL_RULES_MD = Path(__file__).resolve().parents[2] / "docs" / "rules.md"
+
+
+@cache
+def _rules_doc() -> str | None:
+    """Where docs/rules.md is: the `Documentation` project URL of the installed
+    distribution (`.../rules.md`), else the file in a source checkout, else unknown."""
+    try:
+        urls = metadata.metadata("aeroexec").get_all("Project-URL") or []
+    except metadata.PackageNotFoundError:
+        urls = []
+    for entry in urls:
+        label, _, url = entry.partition(",")
+        if label.strip().lower() == "documentation" and url.strip():
+            return url.strip().rstrip("/") + "/rules.md"
+    if _LOCAL_RULES_MD.is_file():
+        return _LOCAL_RULES_MD.as_uri()
+    return None
+
+
+def rule_doc_url(code: str) -> str | None:
+    """The URL of a rule's paragraph in docs/rules.md (its `### CODE` anchor)."""
+    base = _rules_doc()
+    return None if base is None else f"{base}#{code.lower()}"
+
 
 INTRO = """\
 # aeroexec verify: rules
@@ -19,11 +49,14 @@ do not edit by hand. `aeroexec verify --explain CODE` prints the same text.
 
 Codes by range: AX1xx are reported by the catalog loader and passed through by the
 verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility;
-AX5xx start order; AX6xx behavior properties; AX7xx missions (`--mission`); AX9xx the
-catalog against the behavior code that runs it (when the project declares its behaviors:
-`--behaviors`, `[tool.aeroexec] behaviors`, entry points).
+AX5xx start order; AX6xx behavior properties; AX7xx missions (`--mission`); AX8xx the
+Aerostack 4.x task catalogs of 2020-2021 (AX80x from their loader, AX81x-AX82x rules,
+judged as the 2021 constraint-based coordinator, cvar-upm/coordinator_cbc, would); AX9xx
+the catalog against the behavior code that runs it (when the project declares its
+behaviors: `--behaviors`, `[tool.aeroexec] behaviors`, entry points).
 Rules marked *witness* attach, where one exists, the shortest activation sequence that
-makes the problem happen in the executive (`--witness`, and `witness` in JSON/SARIF).
+makes the problem happen in the executive (`--witness`, and `witness` in JSON/SARIF);
+for task catalogs, the shortest `start_task` sequence on a model of that coordinator.
 """
 
 

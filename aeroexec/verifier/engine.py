@@ -1,16 +1,26 @@
-"""Run the verifier: read catalogs and missions, apply every rule, build the report."""
+"""Run the verifier: read catalogs and missions, apply every rule, build the report.
+
+Many inputs, one verdict: an input that cannot be read (a missing file, invalid YAML,
+a mission that is not Python) is recorded as an `InputError` and the others are still
+verified; the report's exit code is then 2.
+"""
 
 from __future__ import annotations
 
 import glob
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from aeroexec.catalog.loader import read_catalog
+from aeroexec import interrupts
+from aeroexec.catalog.formats import AnyCatalog, read_any_catalog
 from aeroexec.catalog.model import Catalog
-from aeroexec.errors import CatalogError, Mark
-from aeroexec.verifier.findings import Finding, Report
+from aeroexec.catalog.tasks import TaskCatalog
+from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.executive.behavior import Behavior
+from aeroexec.gc_pause import paused_gc
+from aeroexec.vehicles.world import World
+from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.missions import (
     MissionScript,
@@ -18,13 +28,15 @@ from aeroexec.verifier.missions import (
     expand_mission_paths,
     read_mission,
 )
-from aeroexec.verifier.registry import catalog_checks, code_checks
+from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
+from aeroexec.verifier.task_rules import TaskContext
 from aeroexec.verifier.witness_run import realize_findings
 
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
 
-CatalogInput = str | Path | Catalog
+CatalogInput = str | Path | Catalog | TaskCatalog
+Library = Mapping[str, type[Behavior]]
 
 
 def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
@@ -34,7 +46,7 @@ def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
     result: list[str] = []
     for pattern in patterns:
         text = str(pattern)
-        if Path(text).exists() or not glob.has_magic(text):
+        if not glob.has_magic(text) or _exists(text):
             result.append(text)
             continue
         matches = sorted(glob.glob(text, recursive=True))
@@ -44,20 +56,34 @@ def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
     return result
 
 
+def _exists(path: str) -> bool:
+    try:
+        return Path(path).exists()
+    except OSError:  # e.g. a name too long: the loader says so
+        return False
+
+
 def check_catalog(
     catalog: Catalog,
     codes: Iterable[str] | None = None,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
     behaviors: BehaviorSet | None = None,
 ) -> list[Finding]:
     """The loader's diagnostics plus every catalog rule's findings (unsorted).
 
-    `codes` restricts the rules that run (loader diagnostics always pass through).
-    With `behaviors` (the implementations the project runs), the catalog is checked
-    against them too (AX9xx).
+    `codes` restricts the rules that run (loader diagnostics always pass through);
+    `world` gives the vehicle limits (default: the built-in world), `library` the
+    behavior implementations whose declarations rules read (default: those of
+    `behaviors`, else the standard library). With `behaviors` (the implementations the
+    project runs), the catalog is checked against them too (AX9xx).
     """
     wanted = None if codes is None else set(codes)
     findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
-    graphs = CatalogGraphs(catalog)
+    if library is None and behaviors is not None:
+        library = behaviors.library()
+    graphs = CatalogGraphs(catalog, world, library)
     for rule in catalog_checks():
         if wanted is not None and rule.code not in wanted:
             continue
@@ -72,40 +98,133 @@ def check_catalog(
     return findings
 
 
-def verify_catalog(catalog: Catalog) -> Report:
-    """Verify one loaded catalog."""
-    return Report(tuple(check_catalog(catalog)), catalogs=(catalog.source,))
+def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None) -> list[Finding]:
+    """The task loader's diagnostics plus every task rule's findings (unsorted)."""
+    wanted = None if codes is None else set(codes)
+    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
+    context = TaskContext(catalog)
+    for rule in task_checks():
+        if wanted is not None and rule.code not in wanted:
+            continue
+        assert rule.check is not None
+        findings.extend(rule.check(context))  # type: ignore[arg-type]
+    return findings
+
+
+def check_any_catalog(
+    catalog: AnyCatalog,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
+    behaviors: BehaviorSet | None = None,
+) -> list[Finding]:
+    if isinstance(catalog, TaskCatalog):
+        return check_task_catalog(catalog)
+    return check_catalog(catalog, world=world, library=library, behaviors=behaviors)
+
+
+def verify_catalog(catalog: AnyCatalog) -> Report:
+    """Verify one loaded catalog (a behavior catalog or a task catalog)."""
+    return Report(tuple(check_any_catalog(catalog)), catalogs=(catalog.source,))
 
 
 def verify_catalog_file(path: str | Path) -> Report:
-    """Read (leniently) and verify one catalog file; `CatalogError` if unreadable."""
-    return verify_catalog(read_catalog(path))
+    """Read (leniently) and verify one catalog file of any generation; `CatalogError`
+    if unreadable."""
+    return verify_catalog(read_any_catalog(path))
+
+
+def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) -> list[AnyCatalog]:
+    loaded: list[AnyCatalog] = []
+    for source in sources:
+        if isinstance(source, (Catalog, TaskCatalog)):
+            loaded.append(source)
+            continue
+        try:
+            paths = expand_catalog_paths([source])
+        except AeroexecError as exc:
+            errors.append(InputError.of(exc, str(source)))
+            continue
+        for path in paths:
+            interrupts.check()
+            try:
+                loaded.append(read_any_catalog(path))
+            except AeroexecError as exc:
+                errors.append(InputError.of(exc, path))
+    return loaded
+
+
+def _read_missions(
+    sources: Sequence[str | Path | MissionScript], errors: list[InputError]
+) -> list[MissionScript]:
+    scripts = [m for m in sources if isinstance(m, MissionScript)]
+    for pattern in (m for m in sources if not isinstance(m, MissionScript)):
+        try:
+            paths = expand_mission_paths([pattern])
+        except AeroexecError as exc:
+            errors.append(InputError.of(exc, str(pattern)))
+            continue
+        for path in paths:
+            interrupts.check()
+            try:
+                scripts.append(read_mission(path))
+            except AeroexecError as exc:
+                errors.append(InputError.of(exc, path))
+    return scripts
 
 
 def verify(
     catalogs: Sequence[CatalogInput],
     missions: Sequence[str | Path | MissionScript] = (),
+    *,
+    world: World | None = None,
+    library: Library | None = None,
     behaviors: BehaviorSet | None = None,
 ) -> Report:
-    """Verify catalogs (paths or loaded catalogs) and the mission scripts (paths, glob
-    patterns or parsed scripts) that use them; every mission is checked against every
-    catalog, and with `behaviors` every catalog against that code.
+    """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
+    the mission scripts (paths, glob patterns or parsed scripts) that use them; every
+    mission is checked against every behavior catalog, and with `behaviors` every
+    behavior catalog against that code.
 
-    Every input is read before any rule runs, so unreadable input raises
-    (`CatalogError` / `MissionError`, exit code 2 at the CLI) before any output.
+    An input that cannot be read becomes an `InputError` of the report (exit code 2)
+    and the rest are verified all the same. `world` (the vehicle's limits) and `library`
+    (the behavior implementations, for their declared situations and destinations)
+    default to the built-in world and the standard library.
     """
-    loaded = [c if isinstance(c, Catalog) else read_catalog(c) for c in catalogs]
-    patterns = [m for m in missions if not isinstance(m, MissionScript)]
-    scripts = [m for m in missions if isinstance(m, MissionScript)]
-    scripts += [read_mission(path) for path in expand_mission_paths(patterns)]
+    # The rules build graphs and indexes as large as the catalog: no cyclic garbage
+    # worth the collector's passes over everything already loaded.
+    with paused_gc():
+        return _verify(catalogs, missions, world, library, behaviors)
+
+
+def _verify(
+    catalogs: Sequence[CatalogInput],
+    missions: Sequence[str | Path | MissionScript],
+    world: World | None,
+    library: Library | None,
+    behaviors: BehaviorSet | None,
+) -> Report:
+    if library is None and behaviors is not None:
+        library = behaviors.library()
+    errors: list[InputError] = []
+    loaded = _read_catalogs(catalogs, errors)
+    scripts = _read_missions(missions, errors)
     findings: list[Finding] = []
+    behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
-        findings.extend(check_catalog(catalog, behaviors=behaviors))
-        note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
+        interrupts.check()
+        findings.extend(
+            check_any_catalog(catalog, world=world, library=library, behaviors=behaviors)
+        )
+    # Missions use the behavior API (execute/activate/inhibit_behavior): they are
+    # checked against the behavior catalogs.
+    for catalog in behavior_catalogs:
+        note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:
-            findings.extend(check_mission(script, catalog, note))
+            findings.extend(check_mission(script, catalog, note, library=library, world=world))
     return Report(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),
         missions=tuple(s.path for s in scripts),
+        input_errors=tuple(errors),
     )

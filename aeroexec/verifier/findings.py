@@ -8,26 +8,33 @@ from enum import Enum
 from typing import Any
 
 from aeroexec.catalog.model import Diagnostic, Severity
-from aeroexec.errors import Mark
+from aeroexec.errors import AeroexecError, Mark, one_line
 
-__all__ = ["Finding", "Outcome", "Report", "Severity", "Step", "Witness"]
+__all__ = ["Finding", "InputError", "Outcome", "PathStep", "Report", "Severity", "Step", "Witness"]
 
 
 @dataclass(frozen=True, slots=True)
 class Step:
-    """One activation of a witness: `activate_behavior(name, arguments)`."""
+    """One request of a witness: `activate_behavior(name, arguments)`, or for a task
+    catalog `start_task(name, arguments)` (`service` "start_task")."""
 
     activate: str
     arguments: tuple[tuple[str, Any], ...] = ()
+    service: str = "activate"
 
     def to_dict(self) -> dict[str, Any]:
-        return {"activate": self.activate, "arguments": dict(self.arguments)}
+        return {self.service: self.activate, "arguments": dict(self.arguments)}
 
-    def describe(self) -> str:
+    def call(self) -> str:
+        """The behavior (or task) with its arguments: `GO_TO_POINT(COORDINATES=[1, 2, 3])`."""
         if not self.arguments:
             return self.activate
         shown = ", ".join(f"{name}={value!r}" for name, value in self.arguments)
         return f"{self.activate}({shown})"
+
+    def describe(self) -> str:
+        verb = "start task" if self.service == "start_task" else "activate"
+        return f"{verb} {self.call()}"
 
 
 class Outcome(str, Enum):
@@ -64,11 +71,65 @@ class Witness:
         if self.outcome is Outcome.INITIATION_FAILS:
             return f"initiation fails before any activation{caveat}"
         names = [s.activate for s in self.steps]
-        prefix = "".join(f"run {s.describe()} to its end, then " for s in self.setup)
-        sequence = prefix + ", then ".join(f"activate {s.describe()}" for s in self.steps)
+        prefix = "".join(f"run {s.call()} to its end, then " for s in self.setup)
+        sequence = prefix + ", then ".join(step.describe() for step in self.steps)
         if self.outcome is Outcome.REJECTED:
-            return f"{sequence}: the activation of {names[-1]} is rejected{caveat}"
+            request = "start" if self.steps[-1].service == "start_task" else "activation"
+            return f"{sequence}: the {request} of {names[-1]} is rejected{caveat}"
         return f"{sequence}: all of {', '.join(dict.fromkeys(names))} stay active{caveat}"
+
+
+@dataclass(frozen=True, slots=True)
+class PathStep:
+    """One step of the way through a mission that leads to a finding: a mission call
+    (`execute`, `activate`, `inhibit`) or a decision (`branch`, `loop`, `return`)."""
+
+    line: int
+    column: int
+    action: str
+    detail: str = ""
+
+    def describe(self) -> str:
+        return f"{self.line}: {self.action}{' ' + self.detail if self.detail else ''}"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "line": self.line,
+            "column": self.column,
+            "action": self.action,
+            "detail": self.detail,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class InputError:
+    """An input the verifier could not read; the other inputs are still verified."""
+
+    message: str
+    file: str
+    line: int = 0
+    column: int = 0
+
+    @classmethod
+    def of(cls, error: AeroexecError, file: str = "") -> InputError:
+        mark = error.mark or Mark(file)
+        return cls(error.message, mark.file, max(mark.line, 0), max(mark.column, 0))
+
+    @property
+    def mark(self) -> Mark:
+        return Mark(self.file, self.line, self.column)
+
+    def __str__(self) -> str:
+        where = str(self.mark) if self.file else "aeroexec"
+        return one_line(f"{where}: error: {self.message}")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "message": self.message,
+            "file": self.file,
+            "line": self.line,
+            "column": self.column,
+        }
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +144,8 @@ class Finding:
     column: int = 0
     subjects: tuple[str, ...] = ()
     witness: Witness | None = None
+    #: For mission findings: the way through the mission that leads here.
+    path: tuple[PathStep, ...] = ()
 
     @classmethod
     def at(
@@ -93,6 +156,7 @@ class Finding:
         mark: Mark,
         subjects: Iterable[str] = (),
         witness: Witness | None = None,
+        path: tuple[PathStep, ...] = (),
     ) -> Finding:
         return cls(
             rule,
@@ -103,6 +167,7 @@ class Finding:
             max(mark.column, 0),
             tuple(dict.fromkeys(subjects)),
             witness,
+            path,
         )
 
     @classmethod
@@ -136,6 +201,7 @@ class Finding:
             "column": self.column,
             "subjects": list(self.subjects),
             "witness": None if self.witness is None else self.witness.to_list(),
+            "path": [step.to_dict() for step in self.path],
         }
 
     def __str__(self) -> str:
@@ -154,6 +220,8 @@ class Report:
     missions: tuple[str, ...] = ()
     #: Findings left out by `at_least` (below the severity asked for).
     hidden: int = 0
+    #: Inputs that could not be read (the others were verified all the same).
+    input_errors: tuple[InputError, ...] = ()
     _counts: Mapping[Severity, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -177,7 +245,10 @@ class Report:
         return self._counts[Severity.INFO]
 
     def exit_code(self, strict: bool = False) -> int:
-        """0 no errors; 1 errors (or warnings when `strict`)."""
+        """0 no errors; 1 errors (or warnings when `strict`); 2 an input could not be
+        read (whatever the others gave)."""
+        if self.input_errors:
+            return 2
         if self.errors or (strict and self.warnings):
             return 1
         return 0
@@ -192,6 +263,7 @@ class Report:
             self.catalogs,
             self.missions,
             self.hidden + len(self.findings) - len(kept),
+            self.input_errors,
         )
 
     def by_rule(self, rule: str) -> tuple[Finding, ...]:
@@ -204,4 +276,5 @@ class Report:
         return {
             "findings": [f.to_dict() for f in self.findings],
             "summary": self.summary(),
+            "inputErrors": [e.to_dict() for e in self.input_errors],
         }

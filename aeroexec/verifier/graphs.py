@@ -3,7 +3,10 @@
 Everything is computed lazily and once per catalog, in time linear in the catalog (plus
 the size of the answers): rules never loop over all pairs of behaviors.
 
-Graphs (networkx):
+The rules work on `digraph.Digraph`s (`requires`, `start_order`,
+`asymmetric_preemption_digraph`) and pair lists (`conflict_pairs`), with iterative
+linear algorithms; networkx views of the same graphs are built on request (networkx is
+imported then, never on the rules' path):
 
 * `conflict_graph` — undirected, capabilities, an edge per declared
   `incompatible_capabilities` pair (symmetric, as the executive reads it);
@@ -22,14 +25,13 @@ Graphs (networkx):
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from itertools import pairwise
-from typing import TYPE_CHECKING, Any, Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
-import networkx as nx
-
+from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.catalog.model import (
     BehaviorDescriptor,
     BehaviorList,
@@ -38,10 +40,23 @@ from aeroexec.catalog.model import (
     Severity,
 )
 from aeroexec.errors import Mark
+from aeroexec.executive.behavior import Behavior
+from aeroexec.vehicles.world import World, default_world
+from aeroexec.verifier.digraph import (
+    Digraph,
+    cyclic_components,
+    dependencies_first,
+    descendants,
+    shortest_cycle,
+)
+
+__all__ = ["CatalogGraphs", "Definition", "OrderEdge", "cycle_edges", "shortest_cycle"]
 from aeroexec.verifier.findings import Finding, Witness
 from aeroexec.verifier.suggest import Suggester
 
 if TYPE_CHECKING:
+    import networkx as nx
+
     from aeroexec.verifier.witness import ActivationModel
 
 T = TypeVar("T", BehaviorDescriptor, BehaviorList, CapabilityDescriptor)
@@ -81,11 +96,27 @@ def node_label(node: Node) -> str:
 
 
 class CatalogGraphs:
-    """The context every catalog rule receives."""
+    """The context every catalog rule receives: the catalog, and the world and behavior
+    library it is meant to fly with (the vehicle's limits; what implementations declare)."""
 
-    def __init__(self, catalog: Catalog) -> None:
+    def __init__(
+        self,
+        catalog: Catalog,
+        world: World | None = None,
+        library: Mapping[str, type[Behavior]] | None = None,
+    ) -> None:
         self.catalog = catalog
         self.file = catalog.source
+        self._world = world
+        self._library = library
+
+    @cached_property
+    def world(self) -> World:
+        return self._world or default_world()
+
+    @cached_property
+    def library(self) -> Mapping[str, type[Behavior]]:
+        return STANDARD_LIBRARY if self._library is None else self._library
 
     # -- findings ------------------------------------------------------------------------
     def finding(
@@ -133,8 +164,9 @@ class CatalogGraphs:
 
     # -- capability expansion (mirrors the specialist: required capabilities first) ------
     @cached_property
-    def requires_graph(self) -> nx.DiGraph:
-        graph = nx.DiGraph()
+    def requires(self) -> Digraph[str]:
+        """Capability -> each capability it requires."""
+        graph: Digraph[str] = Digraph()
         for name, capability in self.catalog.capabilities.items():
             graph.add_node(name)
             for required in capability.required_capabilities:
@@ -142,15 +174,14 @@ class CatalogGraphs:
         return graph
 
     @cached_property
+    def requires_graph(self) -> nx.DiGraph:
+        return self.requires.to_networkx()
+
+    @cached_property
     def requires_cycles(self) -> tuple[frozenset[str], ...]:
         """Strongly connected sets of capabilities that require each other (self-loops
         included), in catalog order."""
-        graph = self.requires_graph
-        found = [
-            frozenset(scc)
-            for scc in nx.strongly_connected_components(graph)
-            if len(scc) > 1 or graph.has_edge(next(iter(scc)), next(iter(scc)))
-        ]
+        found = [frozenset(scc) for scc in cyclic_components(self.requires)]
         order = self.capability_order
         return tuple(sorted(found, key=lambda s: min(order.get(n, len(order)) for n in s)))
 
@@ -162,24 +193,25 @@ class CatalogGraphs:
     def broken_capabilities(self) -> frozenset[str]:
         """Capabilities that cannot be expanded: undefined, in a requires-cycle, or
         requiring (transitively) one of those."""
-        graph = self.requires_graph
+        graph = self.requires
         bad = {n for n in graph if n not in self.catalog.capabilities}
         for scc in self.requires_cycles:
             bad |= scc
-        reverse = graph.reverse(copy=False)
+        if not bad:
+            return frozenset()
+        reverse = graph.reverse()
         broken = set(bad)
         for node in bad:
-            broken |= nx.descendants(reverse, node)
+            broken |= descendants(reverse, node)
         return frozenset(broken)
 
     @cached_property
     def _closures(self) -> dict[str, tuple[str, ...]]:
         """Per good capability: it and everything it requires, required ones first."""
-        graph = self.requires_graph
+        graph = self.requires
         broken = self.broken_capabilities
-        good = graph.subgraph(n for n in graph if n not in broken)
         closures: dict[str, tuple[str, ...]] = {}
-        for name in reversed(list(nx.topological_sort(good))):
+        for name in dependencies_first(graph, (n for n in graph if n not in broken)):
             required = self.catalog.capabilities[name].required_capabilities
             if not required:
                 closures[name] = (name,)
@@ -264,14 +296,27 @@ class CatalogGraphs:
 
     # -- capability conflicts ------------------------------------------------------------
     @cached_property
-    def conflict_graph(self) -> nx.Graph:
-        graph = nx.Graph()
-        graph.add_nodes_from(self.catalog.capabilities)
+    def conflict_pairs(self) -> tuple[tuple[str, str], ...]:
+        """Each declared pair of incompatible capabilities once (no self-pairs), in
+        declaration order."""
+        seen: set[frozenset[str]] = set()
+        pairs: list[tuple[str, str]] = []
         for name, capability in self.catalog.capabilities.items():
             for other in capability.incompatible_capabilities:
-                if other != name:
-                    graph.add_edge(name, other)
-        return graph
+                pair = frozenset((name, other))
+                if other != name and pair not in seen:
+                    seen.add(pair)
+                    pairs.append((name, other))
+        return tuple(pairs)
+
+    @cached_property
+    def conflict_graph(self) -> nx.Graph:
+        graph: Digraph[str] = Digraph()
+        for name in self.catalog.capabilities:
+            graph.add_node(name)
+        for a, b in self.conflict_pairs:
+            graph.add_edge(a, b)
+        return graph.to_networkx(directed=False)
 
     def conflict_mark(self, a: str, b: str) -> Mark:
         """Where the conflict a-b is declared (a's entry naming b, else b's naming a)."""
@@ -389,23 +434,26 @@ class CatalogGraphs:
         }
 
     @cached_property
-    def asymmetric_preemption_graph(self) -> nx.DiGraph:
-        graph = nx.DiGraph()
+    def asymmetric_preemption_digraph(self) -> Digraph[str]:
+        graph: Digraph[str] = Digraph()
         for a, victims in self.asymmetric_preemption.items():
-            graph.add_edges_from((a, b) for b in victims)
+            for b in victims:
+                graph.add_edge(a, b)
         return graph
 
     @cached_property
+    def asymmetric_preemption_graph(self) -> nx.DiGraph:
+        return self.asymmetric_preemption_digraph.to_networkx()
+
+    @cached_property
     def preemption_graph(self) -> nx.DiGraph:
-        graph = nx.DiGraph()
-        graph.add_nodes_from(self.catalog.behaviors)
+        graph: Digraph[str] = Digraph()
         for name in self.catalog.behaviors:
-            graph.add_edges_from(
-                (name, victim)
-                for victim in self.catalog.preempted_by(name)
-                if victim in self.catalog.behaviors
-            )
-        return graph
+            graph.add_node(name)
+            for victim in self.catalog.preempted_by(name):
+                if victim in self.catalog.behaviors:
+                    graph.add_edge(name, victim)
+        return graph.to_networkx()
 
     @cached_property
     def incompatibility_graph(self) -> nx.Graph:
@@ -423,6 +471,11 @@ class CatalogGraphs:
     # -- start order ---------------------------------------------------------------------
     @cached_property
     def start_order_graph(self) -> nx.DiGraph:
+        """`start_order` as a networkx graph (edge attribute `why`)."""
+        return self.start_order.to_networkx(attribute="why")
+
+    @cached_property
+    def start_order(self) -> Digraph[Node]:
         """What must start before what. Nodes: ("process", p), and ("capability", C)
         meaning "C is up" (all its processes run). Edges carry `why`: the OrderEdges
         (catalog order) that impose them:
@@ -435,7 +488,7 @@ class CatalogGraphs:
         * a required capability is up before the first (not yet running) process of the
           capability that requires it.
         """
-        graph = nx.DiGraph()
+        graph: Digraph[Node] = Digraph()
         capabilities = self.catalog.capabilities
         requires_scc: dict[str, frozenset[str]] = {}
         for scc in self.requires_cycles:
@@ -446,21 +499,31 @@ class CatalogGraphs:
             if u == v:
                 return
             if graph.has_edge(u, v):
-                graph.edges[u, v]["why"].append(why)
+                graph.edge(u, v).append(why)
             else:
-                graph.add_edge(u, v, why=[why])
+                graph.add_edge(u, v, [why])
+
+        unique_processes: dict[str, tuple[str, ...]] = {}
+        up_with: dict[str, frozenset[str]] = {}
 
         def processes(name: str) -> tuple[str, ...]:
-            return tuple(dict.fromkeys(capabilities[name].processes))
+            found = unique_processes.get(name)
+            if found is None:
+                found = unique_processes[name] = tuple(dict.fromkeys(capabilities[name].processes))
+            return found
 
-        def running_after(name: str) -> set[str]:
-            """Processes running once `name` is up (with what it requires)."""
-            running: set[str] = set()
-            for capability in self.closure(name) or (name,):
-                running.update(processes(capability))
-            return running
+        def running_after(name: str) -> frozenset[str]:
+            """Processes running once `name` is up (with what it requires); once per
+            capability, however many behaviors list it."""
+            found = up_with.get(name)
+            if found is None:
+                running: set[str] = set()
+                for capability in self.closure(name) or (name,):
+                    running.update(processes(capability))
+                found = up_with[name] = frozenset(running)
+            return found
 
-        def entry(name: str, running: set[str]) -> Node:
+        def entry(name: str, running: set[str] | frozenset[str]) -> Node:
             for process in processes(name):
                 if process not in running:
                     return ("process", process)
@@ -557,23 +620,6 @@ def _definitions(all_items: tuple[T, ...], effective: Mapping[str, T]) -> tuple[
         else:
             out.append(Definition(item, False, winner.mark.line))
     return tuple(out)
-
-
-def shortest_cycle(graph: nx.DiGraph, nodes: Iterable[N], key: Callable[[N], Any]) -> list[N]:
-    """The shortest cycle through the first (by `key`) node of a strongly connected set:
-    [start, ..., start]."""
-    members = set(nodes)
-    start = min(members, key=key)
-    sub = graph.subgraph(members)
-    paths: dict[N, list[N]] = nx.single_source_shortest_path(sub, start)
-    best: list[N] | None = None
-    for pred in sorted(sub.predecessors(start), key=key):
-        path = paths.get(pred)
-        if path is not None and (best is None or len(path) < len(best)):
-            best = path
-    if best is None:
-        raise ValueError("the nodes are not strongly connected")
-    return [*best, start]
 
 
 def cycle_edges(cycle: list[N]) -> Iterator[tuple[N, N]]:

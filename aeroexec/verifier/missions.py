@@ -1,20 +1,26 @@
 """AX7xx: static checks of mission scripts against a catalog.
 
-A mission script is read with `ast` and never executed. Every call of the mission API
-— `execute_behavior`, `activate_behavior`, `inhibit_behavior` and the thesis'
-camelCase `executeBehavior`, `activateBehavior`, `inhibitBehavior`, called bare or as
-an attribute (`api.executeBehavior(...)`) — whose behavior name is a string literal is
-checked: the behavior exists; each keyword argument exists and its literal value has
-the right type, range and number of dimensions (elements that are not literals, like
-`coordinates=[x, y, z]`, still count for the dimension check); `execute_behavior` is
-not given a recurrent behavior; a behavior that is inhibited is activated somewhere.
+A mission script is read with `ast` and never executed. `mission_fold` folds it into
+the mission API calls it makes — `execute_behavior`, `activate_behavior`,
+`inhibit_behavior` and the thesis' camelCase `executeBehavior`, `activateBehavior`,
+`inhibitBehavior`, called bare, as an attribute (`api.executeBehavior(...)`), through
+an alias, from a helper function or in a loop over names — with every argument folded
+to a constant where it is one. Each call whose behavior name is known is checked: the
+behavior exists; each keyword argument exists and its known value has the right type,
+range and number of dimensions (elements that are not known, like `coordinates=[x, y,
+z]`, still count for the dimension check); `execute_behavior` is not given a recurrent
+behavior; a behavior that is inhibited is activated somewhere. Calls whose behavior
+name stays unknown are counted (AX708); a script without an entry point is an error
+(AX707). `mission_run` then runs the calls as a sequence (AX709-AX715).
 """
 
 from __future__ import annotations
 
 import ast
 import glob
-from collections.abc import Iterable, Iterator, Sequence
+import io
+import tokenize
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,22 +28,35 @@ from typing import Any
 from aeroexec.catalog.arguments import check_value
 from aeroexec.catalog.model import ArgumentKind, ArgumentSpec, Catalog, Severity
 from aeroexec.errors import Mark, MissionError
+from aeroexec.executive.behavior import Behavior
 from aeroexec.inputs import read_text
+from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding
+from aeroexec.verifier.mission_fold import (
+    ENTRY_POINTS,
+    MISSION_CALLS,
+    UNKNOWN,
+    CallArgument,
+    FoldedMission,
+    MissionCall,
+    fold_mission,
+)
+from aeroexec.verifier.mission_run import MissionRun
 from aeroexec.verifier.registry import mission_rule
 from aeroexec.verifier.suggest import Suggester
 
-E, W = Severity.ERROR, Severity.WARNING
+E, W, INFO = Severity.ERROR, Severity.WARNING, Severity.INFO
 
-#: Mission API functions -> what they do.
-MISSION_CALLS = {
-    "execute_behavior": "execute",
-    "executeBehavior": "execute",
-    "activate_behavior": "activate",
-    "activateBehavior": "activate",
-    "inhibit_behavior": "inhibit",
-    "inhibitBehavior": "inhibit",
-}
+__all__ = [
+    "MISSION_CALLS",
+    "UNKNOWN",
+    "CallArgument",
+    "MissionCall",
+    "MissionScript",
+    "check_mission",
+    "parse_mission",
+    "read_mission",
+]
 
 UNKNOWN_BEHAVIOR = mission_rule(
     "AX701",
@@ -99,38 +118,39 @@ INHIBIT_NOT_ACTIVATED = mission_rule(
 ).code
 
 
-class _Unknown:
-    """A value the verifier cannot know without running the mission."""
-
-    def __repr__(self) -> str:
-        return "<not a literal>"
-
-
-UNKNOWN: Any = _Unknown()
-
-
-@dataclass(frozen=True, slots=True)
-class CallArgument:
-    name: str
-    value: Any  # a literal, UNKNOWN, or a list that may contain UNKNOWN
-    mark: Mark
-
-
-@dataclass(frozen=True, slots=True)
-class MissionCall:
-    kind: str  # "execute" | "activate" | "inhibit"
-    function: str  # as written: executeBehavior, inhibit_behavior...
-    behavior: str | None  # None when the name is not a string literal
-    arguments: tuple[CallArgument, ...]
-    positional: tuple[Mark, ...]  # extra positional arguments after the name
-    mark: Mark
-    name_mark: Mark
+NO_ENTRY_POINT = mission_rule(
+    "AX707",
+    "mission-no-entry-point",
+    E,
+    """The script defines none of `runMission()`, `run_mission()` or `main()`. Aerostack
+    called `runMission()`; `aeroexec run` calls the first of those it finds after
+    running the module's top level. In flight: nothing of the mission runs (aeroexec
+    refuses the script; Aerostack's interpreter failed on the missing function). Fix:
+    define `runMission()` and put the mission in it.""",
+).code
+NOT_CHECKED = mission_rule(
+    "AX708",
+    "mission-calls-not-checked",
+    INFO,
+    """Mission calls whose behavior name the verifier cannot know before the mission
+    runs (read from a belief, built from data, passed through `*args`). Constants are
+    folded first — a name in a variable, a loop over a literal list of names, a helper
+    function called with constant arguments, an alias of the API — so what is left
+    really depends on the run. In flight: these calls are checked by the executive
+    only, when they happen. Reported once per mission with the lines. Fix: nothing
+    needed; name the behavior literally where you can, to have it checked before
+    flight.""",
+).code
 
 
 @dataclass(frozen=True, slots=True)
 class MissionScript:
     path: str
-    calls: tuple[MissionCall, ...]
+    folded: FoldedMission
+
+    @property
+    def calls(self) -> tuple[MissionCall, ...]:
+        return self.folded.calls
 
 
 # -- reading -----------------------------------------------------------------------------
@@ -141,10 +161,14 @@ def expand_mission_paths(patterns: Iterable[str | Path]) -> list[str]:
     for pattern in patterns:
         text = str(pattern)
         path = Path(text)
-        if path.exists() and not path.is_dir():  # read_mission refuses a non-regular one
+        try:
+            exists, is_dir = path.exists(), path.is_dir()
+        except OSError as exc:  # e.g. a name too long
+            raise MissionError(f"cannot read: {exc.strerror}", Mark(text)) from None
+        if exists and not is_dir:  # read_mission refuses a non-regular one
             found[text] = None
             continue
-        if path.is_dir():
+        if is_dir:
             raise MissionError("is a directory; give mission files or a glob", Mark(text))
         if glob.has_magic(text):
             matches = sorted(m for m in glob.glob(text, recursive=True) if Path(m).is_file())
@@ -162,7 +186,7 @@ def read_mission(path: str | Path) -> MissionScript:
 
 def parse_mission(text: str, file: str = "<mission>") -> MissionScript:
     """Parse (never run) a mission script; `MissionError` with file:line:col when it is
-    not valid Python."""
+    not valid Python, or nested too deeply for Python's own parser."""
     try:
         tree = ast.parse(text, filename=file)
     except SyntaxError as exc:
@@ -171,99 +195,31 @@ def parse_mission(text: str, file: str = "<mission>") -> MissionScript:
         raise MissionError(f"not valid Python: {exc.msg}", Mark(file, line, column)) from None
     except ValueError as exc:  # e.g. NUL bytes
         raise MissionError(f"cannot parse: {exc}", Mark(file)) from None
-    lines = text.splitlines()
-    calls = tuple(_calls(tree, file, lines))
-    return MissionScript(file, calls)
+    except (RecursionError, MemoryError):
+        # CPython's parser gives up on a few thousand nested operators (RecursionError
+        # "during ast construction", or MemoryError from its own stack): Python could
+        # not run the script either.
+        raise MissionError(
+            "nested too deeply for Python's parser (an expression thousands of levels "
+            "deep); Python cannot compile it",
+            _deepest_line(text, file),
+        ) from None
+    return MissionScript(file, fold_mission(tree, file, text.splitlines()))
 
 
-def _mark(file: str, lines: Sequence[str], node: ast.expr | ast.keyword) -> Mark:
-    """1-based line and character column (ast counts UTF-8 bytes)."""
-    line = node.lineno
-    offset = node.col_offset
-    if 0 < line <= len(lines):
-        prefix = lines[line - 1].encode("utf-8")[:offset]
-        offset = len(prefix.decode("utf-8", errors="replace"))
-    return Mark(file, line, offset + 1)
-
-
-def _function_name(func: ast.expr) -> str | None:
-    if isinstance(func, ast.Name):
-        return func.id
-    if isinstance(func, ast.Attribute):
-        return func.attr
-    return None
-
-
-def _calls(tree: ast.AST, file: str, lines: Sequence[str]) -> Iterator[MissionCall]:
-    found = []
-    for node in ast.walk(tree):
-        if not isinstance(node, ast.Call):
-            continue
-        function = _function_name(node.func)
-        if function not in MISSION_CALLS:
-            continue
-        found.append(_call(node, function, file, lines))
-    found.sort(key=lambda c: (c.mark.line, c.mark.column))
-    yield from found
-
-
-def _call(node: ast.Call, function: str, file: str, lines: Sequence[str]) -> MissionCall:
-    mark = _mark(file, lines, node)
-    behavior: str | None = None
-    name_mark = mark
-    positional: list[Mark] = []
-    args = list(node.args)
-    if args and not isinstance(args[0], ast.Starred):
-        first = args.pop(0)
-        name_mark = _mark(file, lines, first)
-        if isinstance(first, ast.Constant) and isinstance(first.value, str):
-            behavior = first.value
-    positional.extend(_mark(file, lines, a) for a in args)
-    arguments: list[CallArgument] = []
-    for keyword in node.keywords:
-        if keyword.arg is None:
-            # **{'angle': 90} with a literal dict is checked like keywords.
-            if isinstance(keyword.value, ast.Dict):
-                for key, value in zip(keyword.value.keys, keyword.value.values, strict=True):
-                    if isinstance(key, ast.Constant) and isinstance(key.value, str):
-                        arguments.append(
-                            CallArgument(key.value, _literal(value), _mark(file, lines, key))
-                        )
-            continue
-        if keyword.arg in ("name", "behavior") and behavior is None and not node.args:
-            if isinstance(keyword.value, ast.Constant) and isinstance(keyword.value.value, str):
-                behavior = keyword.value.value
-                name_mark = _mark(file, lines, keyword.value)
-            continue
-        arguments.append(
-            CallArgument(keyword.arg, _literal(keyword.value), _mark(file, lines, keyword))
-        )
-    return MissionCall(
-        MISSION_CALLS[function],
-        function,
-        behavior,
-        tuple(arguments),
-        tuple(positional),
-        mark,
-        name_mark,
-    )
-
-
-def _literal(node: ast.expr) -> Any:
-    if isinstance(node, ast.Constant):
-        if isinstance(node.value, (str, int, float, bool)) or node.value is None:
-            return node.value
-        return UNKNOWN
-    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        inner = _literal(node.operand)
-        if isinstance(inner, (int, float)) and not isinstance(inner, bool):
-            return -inner if isinstance(node.op, ast.USub) else inner
-        return UNKNOWN
-    if isinstance(node, (ast.List, ast.Tuple)):
-        if any(isinstance(e, ast.Starred) for e in node.elts):
-            return UNKNOWN
-        return [_literal(e) for e in node.elts]
-    return UNKNOWN
+def _deepest_line(text: str, file: str) -> Mark:
+    """The line with the most tokens: where a deep expression sits (tokenizing is flat,
+    it needs no recursion)."""
+    counts: dict[int, int] = {}
+    try:
+        for token in tokenize.generate_tokens(io.StringIO(text).readline):
+            counts[token.start[0]] = counts.get(token.start[0], 0) + 1
+    except (tokenize.TokenError, SyntaxError):
+        pass
+    if not counts:
+        return Mark(file)
+    line = max(counts, key=lambda n: (counts[n], -n))
+    return Mark(file, line, 1)
 
 
 # -- checking ----------------------------------------------------------------------------
@@ -291,7 +247,35 @@ class MissionChecker:
         executed = {c.behavior for c in script.calls if c.kind == "execute"}
         for call in script.calls:
             findings.extend(self._check_call(call, activated, executed))
-        return findings
+        if script.folded.entry is None:
+            findings.append(
+                self._finding(
+                    NO_ENTRY_POINT,
+                    E,
+                    "the script defines none of "
+                    + ", ".join(f"{name}()" for name in ENTRY_POINTS)
+                    + ": no mission runs",
+                    Mark(script.path, 1, 1),
+                    script.path,
+                )
+            )
+        unchecked = script.folded.unchecked
+        if unchecked:
+            lines = ", ".join(str(m.line) for m in unchecked)
+            plural = "s" if len(unchecked) > 1 else ""
+            findings.append(
+                self._finding(
+                    NOT_CHECKED,
+                    INFO,
+                    f"{len(unchecked)} call{plural} not checked: the behavior name is only "
+                    f"known when the mission runs (line{plural} {lines})",
+                    unchecked[0],
+                    *(f"line {m.line}" for m in unchecked),
+                )
+            )
+        # A call site reached with the same values twice (two callers of a helper) says
+        # the same thing once.
+        return list(dict.fromkeys(findings))
 
     def _finding(
         self, rule: str, severity: Severity, message: str, mark: Mark, *subjects: str
@@ -430,6 +414,18 @@ def _show(value: Any) -> str:
     return repr(value)
 
 
-def check_mission(script: MissionScript, catalog: Catalog, note: str = "") -> list[Finding]:
-    """Findings (AX7xx) for one mission script against one catalog."""
-    return MissionChecker(catalog, note).check(script)
+def check_mission(
+    script: MissionScript,
+    catalog: Catalog,
+    note: str = "",
+    *,
+    library: Mapping[str, type[Behavior]] | None = None,
+    world: World | None = None,
+) -> list[Finding]:
+    """Findings (AX7xx) for one mission script against one catalog: each call, then the
+    calls as sequences (`mission_run`), with the behaviors' declared situations from
+    `library` (default: the standard library) and the vehicle limits of `world`
+    (default: the built-in world)."""
+    findings = MissionChecker(catalog, note).check(script)
+    findings += MissionRun(catalog, note, library, world).run(script.folded, script.path)
+    return findings

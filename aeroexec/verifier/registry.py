@@ -6,12 +6,15 @@ Three kinds of entries:
   `aeroexec.catalog.codes`); the verifier passes them through and documents them here;
 * `catalog` — rules over a loaded catalog and its graphs (AX2xx-AX6xx);
 * `mission` — checks of mission scripts against a catalog (AX7xx);
+* `task` — rules over an Aerostack 4.x task catalog (AX81x-AX82x; its loader's
+  diagnostics are AX80x, from `aeroexec.catalog.task_codes`).
 * `code` — the catalog against the behavior implementations that would run it (AX9xx,
   only when the project declares its behaviors; `aeroexec.verifier.rules.code`).
 
 Codes by range: AX1xx loading, AX2xx references, AX3xx capability consistency,
 AX4xx incompatibility, AX5xx start order, AX6xx behavior properties (recurrent/timeout,
-argument specs), AX7xx missions, AX9xx catalog against code.
+argument specs), AX7xx missions, AX8xx task catalogs (2020-2021), AX9xx catalog against
+code.
 """
 
 from __future__ import annotations
@@ -22,18 +25,20 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from aeroexec.catalog import codes
+from aeroexec.catalog import codes, task_codes
 from aeroexec.catalog.model import Severity
 from aeroexec.verifier.findings import Finding
 
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
     from aeroexec.verifier.graphs import CatalogGraphs
+    from aeroexec.verifier.task_rules import TaskContext
 
 CatalogCheck = Callable[["CatalogGraphs"], Iterable[Finding]]
 CodeCheck = Callable[["CatalogGraphs", "BehaviorSet"], Iterable[Finding]]
+TaskCheck = Callable[["TaskContext"], Iterable[Finding]]
 
-KINDS = ("loader", "catalog", "mission", "code")
+KINDS = ("loader", "catalog", "mission", "task", "code")
 
 AREAS = {
     "AX1": "Loading (reported by the catalog loader)",
@@ -43,6 +48,7 @@ AREAS = {
     "AX5": "Start order",
     "AX6": "Behavior properties",
     "AX7": "Missions",
+    "AX8": "Task catalogs (Aerostack 4.x, 2020-2021)",
     "AX9": "Catalog against code",
 }
 
@@ -56,7 +62,7 @@ class Rule:
     #: One paragraph: what it is, how it fails in flight, how to fix it.
     doc: str
     kind: str
-    check: CatalogCheck | CodeCheck | None = None
+    check: CatalogCheck | TaskCheck | CodeCheck | None = None
     #: Findings of this rule carry a witness (an activation sequence) when one exists.
     witness: bool = False
 
@@ -112,6 +118,18 @@ def code_rule(
     return decorate
 
 
+def task_rule(
+    code: str, name: str, severity: Severity, doc: str, *, witness: bool = False
+) -> Callable[[TaskCheck], TaskCheck]:
+    """Decorator: register a check over a task catalog (`TaskContext`) as rule `code`."""
+
+    def decorate(check: TaskCheck) -> TaskCheck:
+        register(Rule(code, name, severity, " ".join(doc.split()), "task", check, witness))
+        return check
+
+    return decorate
+
+
 def mission_rule(code: str, name: str, severity: Severity, doc: str) -> Rule:
     return register(Rule(code, name, severity, " ".join(doc.split()), "mission"))
 
@@ -128,10 +146,13 @@ _LOADER_SEVERITY = {
     codes.MALFORMED_ARGUMENT: Severity.ERROR,
     codes.DIALECT: Severity.INFO,
     codes.IGNORED_SECTION: Severity.INFO,
+    codes.SCALAR_FOR_LIST: Severity.WARNING,
 }
 
 for _code, (_name, _doc) in codes.LOADER_DOCS.items():
     register(Rule(_code, _name, _LOADER_SEVERITY.get(_code), _doc, "loader"))
+for _code, (_name, _severity, _doc) in task_codes.TASK_LOADER_DOCS.items():
+    register(Rule(_code, _name, _severity, _doc, "loader"))
 
 
 def _load_rule_modules() -> None:
@@ -139,6 +160,7 @@ def _load_rule_modules() -> None:
     # whichever module a caller imported first.
     importlib.import_module("aeroexec.verifier.rules")
     importlib.import_module("aeroexec.verifier.missions")
+    importlib.import_module("aeroexec.verifier.task_rules")
 
 
 def all_rules(kind: str | None = None) -> tuple[Rule, ...]:
@@ -170,5 +192,11 @@ def catalog_checks() -> Iterator[Rule]:
 
 def code_checks() -> Iterator[Rule]:
     for rule in all_rules("code"):
+        if rule.check is not None:
+            yield rule
+
+
+def task_checks() -> Iterator[Rule]:
+    for rule in all_rules("task"):
         if rule.check is not None:
             yield rule

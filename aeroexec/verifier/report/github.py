@@ -7,7 +7,7 @@ property values `:` and `,` are too.
 from __future__ import annotations
 
 from aeroexec.catalog.model import Severity
-from aeroexec.verifier.findings import Finding, Report
+from aeroexec.verifier.findings import Finding, InputError, Report
 
 _COMMANDS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.INFO: "notice"}
 
@@ -33,5 +33,18 @@ def format_finding(finding: Finding, *, witness: bool = False) -> str:
     return f"::{_COMMANDS[finding.severity]} {','.join(properties)}::{escape_data(message)}"
 
 
+def format_input_error(error: InputError) -> str:
+    """An unreadable input as an `::error` annotation on the file (and place) itself."""
+    properties = [f"file={escape_property(error.file)}"] if error.file else []
+    if error.line:
+        properties.append(f"line={error.line}")
+        if error.column:
+            properties.append(f"col={error.column}")
+    properties.append("title=unreadable input")
+    return f"::error {','.join(properties)}::{escape_data(error.message)}"
+
+
 def render(report: Report, *, witness: bool = False) -> str:
-    return "".join(format_finding(f, witness=witness) + "\n" for f in report.findings)
+    lines = [format_input_error(e) for e in report.input_errors]
+    lines += [format_finding(f, witness=witness) for f in report.findings]
+    return "".join(line + "\n" for line in lines)

@@ -33,10 +33,17 @@ def summary_line(report: Report, hidden: int = 0) -> str:
     line = f"{', '.join(counts)} in {_plural(inputs, 'file')}"
     if hidden:
         line += f" ({_plural(hidden, 'finding')} below --min-severity not shown)"
+    if report.input_errors:
+        unread = len(report.input_errors)
+        line += f"; {_plural(unread, 'input')} could not be read"
     return line
 
 
 def render(report: Report, *, witness: bool = False, color: bool = False) -> str:
+    """Findings and a summary; nothing when no input could be read (the unreadable
+    ones are reported on stderr, one line each)."""
+    if report.input_errors and not (report.catalogs or report.missions):
+        return ""
     lines: list[str] = []
     for finding in report.findings:
         lines.append(format_finding(finding, color=color))

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 
-from aeroexec.catalog.model import ArgumentKind, Severity
+from aeroexec.catalog.model import ArgumentKind, ArgumentSpec, Severity
 from aeroexec.verifier.findings import Finding
 from aeroexec.verifier.graphs import CatalogGraphs
+from aeroexec.verifier.reach import describe_limits, travel_time
 from aeroexec.verifier.registry import catalog_rule
 
 W = Severity.WARNING
@@ -104,3 +106,54 @@ def duplicate_argument(graphs: CatalogGraphs) -> Iterator[Finding]:
                 )
             else:
                 seen[key] = spec.mark.line
+
+
+def _farthest(spec: ArgumentSpec, kind: str, start: tuple[float, float, float]) -> list[float]:
+    """Per axis, the largest distance a target the spec allows can be from where the
+    behavior starts (the world's start for absolute targets, anywhere for relative)."""
+    assert spec.minimum is not None and spec.maximum is not None
+    origin = start if kind == "absolute" else (0.0, 0.0, 0.0)
+    return [max(abs(spec.minimum - o), abs(spec.maximum - o)) for o in origin]
+
+
+@catalog_rule(
+    "AX604",
+    "timeout-shorter-than-travel",
+    W,
+    """A goal-based behavior takes a destination (GO_TO_POINT's COORDINATES or
+    RELATIVE_COORDINATES: the implementation declares which arguments are destinations)
+    whose allowed range reaches farther than the vehicle can fly within the behavior's
+    timeout, at the speed and acceleration limits of the world description (`verify
+    --world`, default the built-in world; the same limits the simulator enforces). A
+    30 s timeout with coordinates up to 100 m away needs at least 51 s at 2 m/s. In
+    flight: a far target ends in TIME_OUT, not GOAL_ACHIEVED. Fix: raise the timeout
+    above the longest flight, or narrow `allowed_values`.""",
+)
+def timeout_shorter_than_travel(graphs: CatalogGraphs) -> Iterator[Finding]:
+    world = graphs.world
+    for definition in graphs.behavior_defs:
+        behavior = definition.item
+        implementation = graphs.library.get(behavior.name)
+        destinations = getattr(implementation, "destinations", None)
+        if not destinations or behavior.recurrent or behavior.timeout is None:
+            continue
+        for spec in behavior.arguments:
+            kind = destinations.get(spec.name.upper())
+            if kind is None or spec.kind is not ArgumentKind.RANGE or spec.dimensions != 3:
+                continue
+            dx, dy, dz = _farthest(spec, kind, world.start)
+            horizontal = math.hypot(dx, dy)
+            seconds = travel_time(horizontal, dz, world.limits)
+            if seconds <= behavior.timeout:
+                continue
+            where = "from the start" if kind == "absolute" else "away"
+            yield graphs.finding(
+                "AX604",
+                W,
+                f"{behavior.name}: {spec.name} allows targets {horizontal:.0f} m horizontally "
+                f"and {dz:.0f} m vertically {where}, which takes at least {seconds:.0f} s at "
+                f"{describe_limits(world.limits)} ({world.name} world), but the timeout is "
+                f"{_seconds(behavior.timeout)}: a far target ends in TIME_OUT",
+                spec.mark if spec.mark.line else behavior.mark,
+                (behavior.name, spec.name),
+            )

@@ -143,7 +143,7 @@ def undeclared_capability_conflict(graphs: CatalogGraphs) -> Iterator[Finding]:
     # over behaviors that are declared incompatible.
     pairs: dict[tuple[str, str], list[tuple[str, str]]] = {}
     holder_sets = {c: frozenset(h) & activatable for c, h in holders.items()}
-    for a_cap, b_cap in graphs.conflict_graph.edges():
+    for a_cap, b_cap in graphs.conflict_pairs:
         if a_cap in defaults or b_cap in defaults:
             continue  # AX302 / AX303
         a_holders = holder_sets.get(a_cap)

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-import networkx as nx
-
 from aeroexec.catalog.model import Severity
+from aeroexec.verifier.digraph import cyclic_components
 from aeroexec.verifier.findings import Finding, Witness
 from aeroexec.verifier.graphs import CatalogGraphs, cycle_edges, shortest_cycle
 from aeroexec.verifier.registry import catalog_rule
-from aeroexec.verifier.witness import coexistence_witness
+from aeroexec.verifier.witness import EMPTY, coexistence_witness
 
 W = Severity.WARNING
 
@@ -66,12 +65,15 @@ def asymmetric_incompatibility(graphs: CatalogGraphs) -> Iterator[Finding]:
             }
         )
         plural = len(preemptors) > 1
+        consequence = _consequence(
+            graphs, preemptors, b, f"after {'one of them' if plural else preemptors[0]}"
+        )
         yield graphs.finding(
             "AX401",
             W,
             f"{b} is preempted by {_names(preemptors)} (list {', '.join(lists)}) but "
-            f"{'preempts none of them' if plural else 'does not preempt it'}: activated "
-            f"after {'one of them' if plural else preemptors[0]}, {b} runs beside it",
+            f"{'preempts none of them' if plural else 'does not preempt it'}: "
+            f"{consequence}",
             mark,
             (b, *preemptors),
             _witness(graphs, [(a, b) for a in preemptors]),
@@ -86,8 +88,8 @@ def asymmetric_incompatibility(graphs: CatalogGraphs) -> Iterator[Finding]:
         plural = len(victims) > 1
         message = (
             f"{a} preempts {_names(victims)} (list {list_name}) but "
-            f"{'they do' if plural else 'it does'} not preempt {a}: activated after {a}, "
-            f"{'they run' if plural else 'it runs'} beside it"
+            f"{'they do' if plural else 'it does'} not preempt {a}: "
+            + _victims_consequence(graphs, a, victims)
         )
         yield graphs.finding(
             "AX401",
@@ -97,6 +99,50 @@ def asymmetric_incompatibility(graphs: CatalogGraphs) -> Iterator[Finding]:
             (a, *victims),
             _witness(graphs, [(a, b) for b in victims]),
         )
+
+
+def _after(graphs: CatalogGraphs, first: str, second: str) -> str | None:
+    """What activating `second` while `first` runs does, on the activation model:
+    None when both run, else why `second` does not start beside `first`."""
+    model = graphs.model
+    started = model.activate(EMPTY, first)
+    if not started.accepted:
+        return f"{first} can never start"
+    attempt = model.activate(started.after, second)
+    if attempt.accepted:
+        return None if first in attempt.after else f"{second} stops {first}"
+    if attempt.reason == "conflict with referenced":
+        return f"{second} is rejected (its capabilities conflict with {first}'s)"
+    return f"{second} can never start"
+
+
+def _consequence(graphs: CatalogGraphs, preemptors: list[str], victim: str, when: str) -> str:
+    """The claim about activating `victim` after its preemptors, checked on the model."""
+    outcomes = {a: _after(graphs, a, victim) for a in preemptors}
+    beside = [a for a, why in outcomes.items() if why is None]
+    if len(beside) == len(preemptors):
+        return f"activated {when}, {victim} runs beside it"
+    others = [f"after {a}, {why}" for a, why in outcomes.items() if why is not None]
+    if not beside:
+        return "they never run together (" + "; ".join(others[:_SHOWN]) + ")"
+    return f"activated after {_names(beside)}, {victim} runs beside it; " + "; ".join(
+        others[:_SHOWN]
+    )
+
+
+def _victims_consequence(graphs: CatalogGraphs, attacker: str, victims: tuple[str, ...]) -> str:
+    outcomes = {b: _after(graphs, attacker, b) for b in victims}
+    beside = [b for b, why in outcomes.items() if why is None]
+    plural = len(beside) > 1
+    if len(beside) == len(victims):
+        return f"activated after {attacker}, {'they run' if plural else 'it runs'} beside it"
+    others = [why for why in outcomes.values() if why is not None]
+    if not beside:
+        return f"they never run together (after {attacker}: " + "; ".join(others[:_SHOWN]) + ")"
+    return (
+        f"activated after {attacker}, {_names(beside)} {'run' if plural else 'runs'} beside "
+        f"it; " + "; ".join(others[:_SHOWN])
+    )
 
 
 def _witness(graphs: CatalogGraphs, pairs: list[tuple[str, str]]) -> Witness | None:
@@ -120,11 +166,11 @@ def _witness(graphs: CatalogGraphs, pairs: list[tuple[str, str]]) -> Witness | N
     or break the cycle.""",
 )
 def asymmetric_incompatibility_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    graph = graphs.asymmetric_preemption_graph
-    if graph.number_of_edges() == 0:
+    graph = graphs.asymmetric_preemption_digraph
+    if not graph.succ:
         return
     order = graphs.catalog.order_of
-    components = [c for c in nx.strongly_connected_components(graph) if len(c) > 1]
+    components = [c for c in cyclic_components(graph) if len(c) > 1]
     components.sort(key=lambda c: min(order(n) for n in c))
     for component in components:
         cycle = shortest_cycle(graph, component, order)

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-import networkx as nx
-
 from aeroexec.catalog.model import Severity
+from aeroexec.verifier.digraph import cyclic_components, descendants
 from aeroexec.verifier.findings import Finding
 from aeroexec.verifier.graphs import (
     CatalogGraphs,
@@ -38,19 +37,25 @@ E, W = Severity.ERROR, Severity.WARNING
     imposing an edge of the cycle.""",
 )
 def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    graph = graphs.start_order_graph
-    components = [c for c in nx.strongly_connected_components(graph) if len(c) > 1]
+    graph = graphs.start_order
+    components = [c for c in cyclic_components(graph) if len(c) > 1]
     components.sort(key=lambda c: min(graphs.node_order(n) for n in c))
     for component in components:
         cycle = shortest_cycle(graph, component, graphs.node_order)
-        reasons: list[OrderEdge] = [graph.edges[u, v]["why"][0] for u, v in cycle_edges(cycle)]
+        reasons: list[OrderEdge] = [graph.edge(u, v)[0] for u, v in cycle_edges(cycle)]
         shown = " -> ".join(node_label(n) for n in cycle)
         because = "; ".join(dict.fromkeys(r.reason for r in reasons if not r.implied))
         # Everyone imposing an edge inside the strongly connected set takes part, not
         # only those on the cycle shown (which depends on where the search starts).
-        inside = graph.subgraph(component)
         imposers = sorted(
-            {why.by for _, _, whys in inside.edges(data="why") for why in whys if not why.implied}
+            {
+                why.by
+                for u in component
+                for v, whys in graph.succ[u].items()
+                if v in component
+                for why in whys
+                if not why.implied
+            }
         )
         members = sorted(name for _, name in component)
         # The edge a behavior imposes is the most likely to be "the wrong one".
@@ -76,16 +81,16 @@ def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
     witness=True,
 )
 def required_capability_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    requires = graphs.requires_graph
+    requires = graphs.requires
     order = graphs.capability_order
-    reverse = requires.reverse(copy=False)
+    reverse = requires.reverse()
     for component in graphs.requires_cycles:
         cycle = shortest_cycle(requires, component, lambda n: order.get(n, len(order)))
         first = graphs.catalog.capabilities[cycle[0]]
         index = first.required_capabilities.index(cycle[1])
         reaching = set(component)
         for node in component:
-            reaching |= nx.descendants(reverse, node)
+            reaching |= descendants(reverse, node)
         affected = [
             b
             for b in graphs.catalog.behaviors
