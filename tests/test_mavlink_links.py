@@ -146,11 +146,9 @@ def test_a_dropped_tcp_connection_is_a_loss_at_once_and_comes_back(tmp_path: Pat
 
 def test_no_tcp_server_exits_2_naming_the_refusal(tmp_path: Path) -> None:
     port = free_tcp_port()
-    result = CliRunner().invoke(
-        app,
-        ["fly", str(write_mission(tmp_path, SHORT_FLIGHT)), "--connect", f"tcp:127.0.0.1:{port}"]
-        + ["--connect-timeout", "0.6"],
-    )
+    mission = str(write_mission(tmp_path, SHORT_FLIGHT))
+    url = f"tcp:127.0.0.1:{port}"
+    result = CliRunner().invoke(app, ["fly", mission, "--connect", url, "--connect-timeout", "0.6"])
     assert result.exit_code == 2
     assert result.output.strip().splitlines()[-1] == (
         f"aeroexec: error: no connection to tcp:127.0.0.1:{port} within 0.6 s (Connection refused)"
