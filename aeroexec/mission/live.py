@@ -184,18 +184,27 @@ def fly(
             catalog, vehicle=vehicle, clock=clock, observers=all_observers, drone=config.drone
         )
         vehicle.tap = executive.bus.publish  # hands over the traffic of the connection too
+        executive.publish_vehicle_state()  # what the mission starts from (replay needs it)
         api = MissionAPI(executive)
         outcome = MissionOutcome(False, None, "the mission did not end")
         try:
             outcome = run_script(script, api)
+            how = "returned" if outcome.returned else "raised"
         except LinkTimeout as exc:
             outcome = MissionOutcome(
                 False, None, f"stopped: the link was lost for {exc.silent_s:.1f} s"
             )
+            how = "link_timeout"
         except BaseException as exc:
             # A signal, Ctrl-C, an unusable script, our own bug: whatever it is, the
             # vehicle gets its ending before the exception goes on.
             stopped = exc
+            how = exc.name if isinstance(exc, Interrupted) else type(exc).__name__
+        # When and how the mission ended: replay stops a mission stopped here at the
+        # same tick, and tells the ending's commands from the mission's.
+        executive.bus.publish(
+            "mavlink/link", {"event": "mission_end", "url": vehicle.endpoint.url, "how": how}
+        )
         ending = end_flight(
             executive, api, vehicle, config.on_exit, link_timeout=config.link_timeout
         )

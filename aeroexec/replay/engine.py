@@ -26,6 +26,7 @@ from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
+from aeroexec.replay.liveloop import is_live, replay_live
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S
 
@@ -123,7 +124,10 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
         )
     mode = choose_mode(run, options.mode)
     catalog = choose_catalog(run, options.catalog)
-    if mode is Mode.closed:
+    if mode is Mode.closed and is_live(run):
+        # A live flight cannot be flown again: its recorded vehicle stands in for it.
+        replayed, how = replay_live(path, run, catalog, options.output, horizon)
+    elif mode is Mode.closed:
         replayed, how = replay_closed(run, catalog, options.output, horizon)
     else:
         replayed, how = replay_open(path, run, catalog, options.output, horizon)
