@@ -62,6 +62,9 @@ STREAMS: tuple[tuple[int, float], ...] = (
     (mavlink.MAVLINK_MSG_ID_SYS_STATUS, 2.0),
     (mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, 2.0),
 )
+#: The ground station's HEARTBEAT: at least every `gcs_heartbeat_period`, and once per
+#: autopilot heartbeat, but never more often than this (Hz).
+GCS_HEARTBEAT_MAX_HZ = 20.0
 #: Traffic kept while no tap is attached (beyond it, only counted).
 MAX_BUFFERED = 100_000
 
@@ -189,6 +192,7 @@ class MavlinkVehicle:
         self._yaw_target_ned: float | None = None
         self._velocity_ned: tuple[float, float, float] | None = None
         self._next_gcs_heartbeat = -math.inf
+        self._last_gcs_heartbeat = -math.inf
         self._next_velocity = math.inf
         self._streams_requested = False
 
@@ -366,6 +370,11 @@ class MavlinkVehicle:
     def _heartbeat(self, item: Received) -> None:
         self.telemetry.apply(item.msg)
         self._last_heartbeat = self._clock()
+        # Answer each autopilot heartbeat with ours (at most GCS_HEARTBEAT_MAX_HZ): an
+        # autopilot that beats faster than 1 Hz runs faster than the wall clock (SITL
+        # with a speed-up), and its GCS failsafe (FS_GCS_TIMEOUT) counts on its clock.
+        if self._last_heartbeat - self._last_gcs_heartbeat >= 1.0 / GCS_HEARTBEAT_MAX_HZ:
+            self._beat(self._last_heartbeat)
         if self.link_lost:
             silent = self._last_heartbeat - (self.lost_since or self._last_heartbeat)
             self.link_lost = False
@@ -390,20 +399,24 @@ class MavlinkVehicle:
         self.link.unlock()
         self._event("lost", silent_s=round(now - self.lost_since, 3), why=why)
 
+    def _beat(self, now: float) -> None:
+        self.link.send(
+            mavlink.MAVLink_heartbeat_message(
+                mavlink.MAV_TYPE_GCS,
+                mavlink.MAV_AUTOPILOT_INVALID,
+                0,
+                0,
+                mavlink.MAV_STATE_ACTIVE,
+                3,
+            )
+        )
+        self._last_gcs_heartbeat = now
+        self._next_gcs_heartbeat = now + self.config.gcs_heartbeat_period
+
     def _service(self) -> None:
         now = self._clock()
         if now >= self._next_gcs_heartbeat:
-            self.link.send(
-                mavlink.MAVLink_heartbeat_message(
-                    mavlink.MAV_TYPE_GCS,
-                    mavlink.MAV_AUTOPILOT_INVALID,
-                    0,
-                    0,
-                    mavlink.MAV_STATE_ACTIVE,
-                    3,
-                )
-            )
-            self._next_gcs_heartbeat = now + self.config.gcs_heartbeat_period
+            self._beat(now)
         if (
             self.target is not None
             and not self.link_lost
