@@ -162,6 +162,32 @@ def test_behaviors_still_active_are_inhibited_before_landing(tmp_path: Path) -> 
     assert result.safe and final["position"][1] < 5.0  # it never flew the 30 m
 
 
+def test_a_vehicle_a_pilot_took_over_is_left_to_the_pilot(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n    return api.executeBehavior('WAIT', duration=2)\n",
+    )
+    with mavsim(port) as sim:
+
+        def pilot() -> None:
+            while not sim.flying:
+                time.sleep(0.05)
+            time.sleep(0.5)
+            sim._enter_mode(5)  # the pilot flips the mode switch to LOITER
+
+        thread = threading.Thread(target=pilot, daemon=True)
+        thread.start()
+        result = fly(config(mission, port))
+        thread.join(5)
+        final = sim.stats()["final"]
+    assert result.ending is not None and result.ending.actions == ()
+    assert result.ending.problem == (
+        "LOITER was not commanded by aeroexec: a pilot or the autopilot has it"
+    )
+    assert final["mode"] == "LOITER" and final["flying"]  # no LAND forced on the pilot
+
+
 # -- a link that does not come back ---------------------------------------------------------------
 
 

@@ -620,6 +620,14 @@ class MavlinkVehicle:
         return self.telemetry.custom_mode in DESCENDING_MODES
 
     @property
+    def in_commanded_mode(self) -> bool:
+        """The autopilot is in the mode aeroexec last commanded (not a pilot's, nor one
+        its own failsafe chose, nor the one it had when aeroexec connected)."""
+        return self._commanded_mode is not None and (
+            self.telemetry.custom_mode == self._commanded_mode
+        )
+
+    @property
     def down(self) -> bool:
         """Landed and disarmed, as last heard."""
         return not self.telemetry.flying and not self.telemetry.armed

@@ -12,7 +12,9 @@ state keeps being recorded:
    LAND (unless the autopilot is already landing or returning) and waits, bounded, for
    landed and disarmed, disarming a vehicle left armed on the ground; `hold` brakes and
    holds in GUIDED and leaves it to the autopilot's own GCS failsafe; `none` leaves the
-   vehicle as it is.
+   vehicle as it is. A vehicle flying in a mode aeroexec did not command (a pilot took
+   over with the sticks, or was flying it when aeroexec connected) is left to whoever
+   has it: aeroexec never takes a vehicle away from a pilot.
 
 A signal during the waits (a second Ctrl-C) stops waiting: the vehicle keeps doing what
 it was told. The result says whether the vehicle ended landed and disarmed, and the one
@@ -145,6 +147,13 @@ def _land(
             continue
         if vehicle.telemetry.flying and not commanded:
             commanded = True
+            if not (vehicle.descending or vehicle.in_commanded_mode):
+                mode = vehicle.telemetry.mode
+                return _ending(
+                    vehicle,
+                    actions,
+                    f"{mode} was not commanded by aeroexec: a pilot or the autopilot has it",
+                )
             actions.append(_tell(vehicle.bring_down))
             bound = _landing_bound(vehicle)
             deadline = stepper.now + bound
