@@ -15,8 +15,9 @@ command raises, and a `mavlink/link` event is published. When heartbeats come ba
 configured failsafe runs (`hold`: brake and hold where the vehicle is; `land`: switch to
 LAND; `rtl`: switch to RTL). With `link_timeout`, a link lost for longer than that makes
 `step()` raise `LinkTimeout`, which ends the flight (see `aeroexec.mission.ending`).
-The ground station's own 1 Hz HEARTBEAT is what ArduPilot's GCS failsafe
-(`FS_GCS_ENABLE`) watches: when aeroexec dies, the autopilot acts on its own.
+The ground station's own HEARTBEAT (every second, and once per autopilot heartbeat) is
+what ArduPilot's GCS failsafe (`FS_GCS_ENABLE`) watches: when aeroexec dies, the
+autopilot acts on its own.
 
 Every packet in and out is handed to `tap(topic, payload)` (wired to the executive's
 bus by `aeroexec.mission.live.fly`); until a tap is attached the vehicle keeps them and
