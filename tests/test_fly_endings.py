@@ -22,6 +22,7 @@ from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.executive.bus import MemoryObserver, TopicRecord
+from aeroexec.executive.clock import WallClock
 from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.recording import open_recording
@@ -314,3 +315,18 @@ def test_sigint_while_waiting_for_the_autopilot_exits_130_having_commanded_nothi
         "aeroexec: interrupted by SIGINT; stopped before the autopilot was ready; "
         "nothing was commanded"
     )
+
+
+# -- time -----------------------------------------------------------------------------------------
+
+
+def test_a_late_tick_is_not_made_up_for_with_a_burst() -> None:
+    tick = 10_000_000  # 10 ms
+    clock = WallClock(tick_ns=tick)
+    clock.advance()
+    time.sleep(0.055)  # a command waited for its ack: five ticks were missed
+    late = clock.advance()
+    following = clock.advance()
+    # The tick after the late one waits for the next slot of the grid instead of
+    # running at once to catch up.
+    assert following // tick > late // tick
