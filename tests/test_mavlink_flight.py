@@ -32,6 +32,7 @@ from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
+from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
 
 PY = sys.executable
 
@@ -197,9 +198,12 @@ def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
     recording = open_recording(record)
     assert recording.complete
     topics: dict[str, list[Any]] = {}
+    first_command_ns = None
     for item in recording.records():
         if isinstance(item, RecordedTopic):
             topics.setdefault(item.name, []).append(item.data)
+            if item.name == "mission/command" and first_command_ns is None:
+                first_command_ns = item.log_time_ns
     tx, rx = topics["mavlink/tx"], topics["mavlink/rx"]
     rejected = Counter(r["reason"] for r in topics["mavlink/rejected"])
     # Ground station -> vehicle: everything fly sent is what mavsim received, by type.
@@ -226,9 +230,22 @@ def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
     # The recording's own summary agrees, and the link events are there.
     (final_stats,) = topics["mavlink/stats"]
     assert final_stats["rejected"]["foreign_address"] == 25
-    assert [e["event"] for e in topics["mavlink/link"]] == ["connected"]
+    assert [e["event"] for e in topics["mavlink/link"]] == ["connected", "mission_end", "ending"]
+    assert topics["mavlink/link"][1]["how"] == "returned"
+    ending = topics["mavlink/link"][-1]
+    assert ending["down"] and ending["actions"] == [] and ending["problem"] == ""
+    assert ending["last_seen"].startswith("on the ground at (")
     events = [e["code"] for e in topics["behavior_event"]]
     assert events.count("GOAL_ACHIEVED") == 6
+    # Time 0 is when the link came up: the mission's first command comes right away
+    # (mavsim's EKF took 2 vehicle seconds before that).
+    assert first_command_ns is not None and first_command_ns < 100_000_000
+    # The unchanged flight replays with no difference, open and closed loop (the
+    # closed loop runs the recorded mission and behaviors against the recorded vehicle).
+    for mode in (Mode.open, Mode.closed):
+        replayed = replay_recording(record, ReplayOptions(mode=mode))
+        assert replayed.diff is not None and replayed.diff.compared == 9, mode
+        assert replayed.equal, (mode, [d.message for d in replayed.diff.differences])
 
 
 # -- link loss --------------------------------------------------------------------------------
@@ -273,8 +290,12 @@ def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
     # A command while the link is down is refused by the vehicle: a clean failure too.
     assert "set_yaw: refused, link lost (no heartbeat for 1 s)" in rows["ROTATE"].detail
     events = [e["event"] for e in memory.topics("mavlink/link")]
-    assert events == ["connected", "lost", "restored", "failsafe"]
-    assert memory.topics("mavlink/link")[-1]["action"] == "land"
+    assert events == ["connected", "lost", "restored", "failsafe", "mission_end", "ending"]
+    assert memory.topics("mavlink/link")[3]["action"] == "land"
+    # The vehicle ended down, but the flight lost its link: not a safe flight.
+    assert result.ending is not None and result.ending.down
+    assert result.link_losses == 1 and not result.safe
+    assert result.problem().startswith("the link was lost 1 time during the flight; vehicle")
     assert stats["dropped_heartbeats"] >= 1
     # The failsafe's LAND reached the vehicle after the link came back, and it landed
     # short of the goal it was flying to.
@@ -437,9 +458,11 @@ def test_a_signed_ground_station_ignores_an_unsigned_vehicle(tmp_path: Path) -> 
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["--connect", "tcp:127.0.0.1:5760"], "unsupported connection 'tcp:127.0.0.1:5760'"),
+        (["--connect", "tcp4:127.0.0.1:5760"], "unsupported connection 'tcp4:127.0.0.1:5760'"),
         (["--connect", "udpin:0.0.0.0:14550"], "is not a loopback address; pass --allow-remote"),
-        (["--failsafe", "panic"], "--failsafe must be one of hold, land"),
+        (["--failsafe", "panic"], "--failsafe must be one of land, hold, rtl"),
+        (["--on-exit", "panic"], "--on-exit must be one of land, hold, none"),
+        (["--link-timeout", "-1"], "link timeout must be >= 0 seconds"),
         (["--heartbeat-timeout", "0"], "heartbeat timeout must be positive"),
         (["--signing-key", " "], "--signing-key: the signing key is empty"),
     ],

@@ -123,24 +123,51 @@ def test_copter_mode_numbers_are_pymavlinks() -> None:
 
 def test_endpoints_parse_like_mavutil_and_stay_on_loopback() -> None:
     e = parse_endpoint("udpin:127.0.0.1:14550")
-    assert (e.direction, e.host, e.port) == ("udpin", "127.0.0.1", 14550)
-    assert parse_endpoint("udp:localhost:9000").direction == "udpin"
+    assert (e.kind, e.host, e.port, e.stream) == ("udpin", "127.0.0.1", 14550, False)
+    assert parse_endpoint("udp:localhost:9000").kind == "udpin"
     assert parse_endpoint("udp:localhost:9000").host == "127.0.0.1"
-    assert parse_endpoint("udpout:127.0.0.2:9000").direction == "udpout"
+    assert parse_endpoint("udpout:127.0.0.2:9000").kind == "udpout"
     assert parse_endpoint("udpin:0.0.0.0:9000", allow_remote=True).host == "0.0.0.0"
+    tcp = parse_endpoint("tcp:localhost:5760")
+    assert (tcp.kind, tcp.host, tcp.port, tcp.stream, tcp.loopback) == (
+        "tcp",
+        "127.0.0.1",
+        5760,
+        True,
+        True,
+    )
+    assert parse_endpoint("tcpin:127.0.0.1:5762").kind == "tcpin"
+    assert parse_endpoint("tcpin:0.0.0.0:5762", allow_remote=True).loopback is False
+    # A serial device is local: no --allow-remote needed. pymavlink's DEVICE,BAUD
+    # spelling; without a baud rate the caller's default applies.
+    radio = parse_endpoint("/dev/ttyUSB0,57600")
+    assert (radio.kind, radio.device, radio.baud, radio.stream, radio.loopback) == (
+        "serial",
+        "/dev/ttyUSB0",
+        57600,
+        True,
+        True,
+    )
+    usb = parse_endpoint("/dev/serial/by-id/usb-ArduPilot_fmuv3-if00", baud=921600)
+    assert (usb.device, usb.baud) == ("/dev/serial/by-id/usb-ArduPilot_fmuv3-if00", 921600)
 
 
 @pytest.mark.parametrize(
     ("url", "message"),
     [
-        ("tcp:127.0.0.1:5760", "unsupported connection 'tcp:127.0.0.1:5760'"),
+        ("tcpx:127.0.0.1:5760", "unsupported connection 'tcpx:127.0.0.1:5760'"),
+        ("ttyUSB0", "unsupported connection 'ttyUSB0' (use udpin:HOST:PORT"),
+        ("tcp:10.0.0.2:5760", "not a loopback address; pass --allow-remote"),
+        ("tcpin:0.0.0.0:5760", "not a loopback address; pass --allow-remote"),
+        ("tcp:[::1]:5760", "TCP over IPv6 is not supported"),
+        ("/dev/ttyUSB0,fast", "baud rate 'fast' is not a number"),
+        ("/dev/ttyUSB0,0", "baud rate must be positive"),
         ("udpin:127.0.0.1", "needs HOST:PORT"),
         ("udpin:127.0.0.1:port", "port 'port' is not a number"),
         ("udpin:127.0.0.1:70000", "out of range"),
         ("udpin:0.0.0.0:14550", "not a loopback address; pass --allow-remote"),
         ("udpout:192.168.1.10:14550", "not a loopback address; pass --allow-remote"),
         ("udpout:drone.example:14550", "is not a loopback address"),
-        ("/dev/ttyUSB0", "unsupported connection"),
     ],
 )
 def test_bad_or_remote_endpoints_are_refused_with_the_reason(url: str, message: str) -> None:
@@ -584,7 +611,7 @@ def test_garbage_from_the_autopilots_own_address_is_parsed_counted_and_survived(
     with FakeAutopilot(vehicle_port, answer=lambda msg: mavlink.MAV_RESULT_ACCEPTED) as autopilot:
         vehicle.connect()
         for blob in blobs:
-            autopilot.link.sock.sendto(blob, ("127.0.0.1", vehicle_port))
+            autopilot.link.transport.sock.sendto(blob, ("127.0.0.1", vehicle_port))
         time.sleep(0.1)
         vehicle.step(0.1)
         vehicle.set_yaw(0.5)  # still commanded and acknowledged after the garbage

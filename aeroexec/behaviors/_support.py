@@ -7,6 +7,7 @@ import: `check_situation` is on every activation's path.
 from __future__ import annotations
 
 import math
+from collections import deque
 
 from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, Situation
 from aeroexec.executive.beliefs import Beliefs, Compound, parse_query
@@ -84,26 +85,34 @@ def angle_error_degrees(target: float, actual: float) -> float:
 class ProgressWatch:
     """Tells when a remaining-distance measure has stopped shrinking.
 
-    Progress is a new best by at least `min_gain`; `stalled` turns true once `window`
-    seconds pass without any. Creeping by less than `min_gain` does not count, so a
-    vehicle pushing against a fault is caught even if its estimate jitters.
+    Progress means "closer than within the last window": `stalled` turns true once the
+    measure has been watched for `window` seconds and is not at least `min_gain` below
+    every value it had in the last `window` seconds (the one a window ago included).
+    Comparing with the recent past, not with the best ever seen, is what lets a vehicle
+    that overshot its goal make progress again: a real autopilot arriving at speed passes
+    the goal, stops beyond it and creeps back, and creeping back is progress. A vehicle
+    that is stuck, or swings back and forth without closing in (at the top of a swing it
+    is no closer than a swing ago), is caught; so is creeping by less than `min_gain` per
+    window, even if the estimate jitters.
     """
 
-    __slots__ = ("_best", "_since", "min_gain", "window")
+    __slots__ = ("_samples", "min_gain", "window")
 
     def __init__(self, min_gain: float, window: float = PROGRESS_WINDOW) -> None:
         self.min_gain = min_gain
         self.window = window
-        self._best = math.inf
-        self._since: float | None = None
+        self._samples: deque[tuple[float, float]] = deque()
 
     def stalled(self, now: float, remaining: float) -> bool:
-        if self._since is None or remaining <= self._best - self.min_gain:
-            self._best = remaining
-            self._since = now
-            return False
-        self._best = min(self._best, remaining)
-        return now - self._since >= self.window
+        samples = self._samples
+        samples.append((now, remaining))
+        cutoff = now - self.window
+        # Keep the newest sample at or before the cutoff: the value "a window ago".
+        while len(samples) > 1 and samples[1][0] <= cutoff:
+            samples.popleft()
+        if samples[0][0] > cutoff:
+            return False  # watched for less than a window yet
+        return remaining > max(value for _, value in samples) - self.min_gain
 
 
 class MotionBehavior(Behavior):

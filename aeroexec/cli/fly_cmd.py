@@ -17,7 +17,7 @@ from aeroexec.cli.project import (
     project_behaviors,
 )
 from aeroexec.cli.run_cmd import finish, print_row, print_summary
-from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL
+from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
 from aeroexec.mavlink.vehicle import MavlinkVehicle
 from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
@@ -48,35 +48,63 @@ def fly_command(
     connect: str | None = typer.Option(
         None,
         "--connect",
-        help="MAVLink endpoint: udpin:HOST:PORT or udpout:HOST:PORT "
-        f"(default: the project's, else {DEFAULT_GCS_URL}).",
+        metavar="URL",
+        help="MAVLink endpoint: udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT, "
+        "tcpin:HOST:PORT, or a serial device (/dev/ttyUSB0 or /dev/ttyUSB0,57600); "
+        f"default: the project's, else {DEFAULT_GCS_URL}.",
+    ),
+    baud: int = typer.Option(
+        DEFAULT_BAUD, "--baud", metavar="N", help="Baud rate of a serial device given without one."
     ),
     catalog: Path | None = typer.Option(
         None,
         "--catalog",
         "-c",
+        metavar="FILE",
         help="Behavior catalog (YAML); default: the project's, else the bundled default.",
     ),
     record: Path | None = typer.Option(
         None,
         "--record",
         "-r",
+        metavar="FILE",
         help="Record the session (and all MAVLink traffic) to this MCAP file.",
     ),
     heartbeat_timeout: float = typer.Option(
-        3.0, "--heartbeat-timeout", help="Seconds without an autopilot heartbeat = link lost."
+        3.0,
+        "--heartbeat-timeout",
+        metavar="SECONDS",
+        help="Seconds without an autopilot heartbeat = link lost.",
+    ),
+    link_timeout: float = typer.Option(
+        30.0,
+        "--link-timeout",
+        metavar="SECONDS",
+        help="A link lost this long ends the flight (fly waits that long for it to return).",
     ),
     failsafe: str = typer.Option(
-        "hold", "--failsafe", help="What to do when a lost link returns: hold or land."
+        "land", "--failsafe", metavar="[land|hold|rtl]", help="What to do when a lost link returns."
+    ),
+    on_exit: str = typer.Option(
+        "land",
+        "--on-exit",
+        metavar="[land|hold|none]",
+        help="How the flight ends when the mission returns, raises or is stopped by a signal.",
     ),
     signing_key: str | None = typer.Option(
-        None, "--signing-key", help="MAVLink 2 signing: 64 hex digits or a passphrase."
+        None,
+        "--signing-key",
+        metavar="KEY",
+        help="MAVLink 2 signing: 64 hex digits or a passphrase.",
     ),
     allow_remote: bool = typer.Option(
         False, "--allow-remote", help="Allow a non-loopback endpoint (a real network)."
     ),
     connect_timeout: float = typer.Option(
-        10.0, "--connect-timeout", help="Seconds to wait for the first heartbeat."
+        10.0,
+        "--connect-timeout",
+        metavar="SECONDS",
+        help="Seconds to wait for the first heartbeat and position (SITL needs ~40 s to boot).",
     ),
     behaviors: BehaviorsOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
@@ -86,14 +114,19 @@ def fly_command(
     """Fly MISSION on a live autopilot (ArduPilot Copter, GUIDED mode) over MAVLink.
 
     The live counterpart of `aeroexec run`: same core, same behaviors, same printout,
-    on the wall clock. Try it against the simulator:
+    on the wall clock. Try it against the simulator or ArduCopter SITL:
 
     \b
         aeroexec mavsim --speed-factor 3 &
         aeroexec fly missions/appendix_c.py --record flight.mcap
+        aeroexec fly missions/appendix_c.py --connect tcp:127.0.0.1:5760 --connect-timeout 60
 
-    Exit code 0 when the mission function returned, 1 when it raised, 2 when an input
-    could not be read or the autopilot never answered.
+    However it ends, the vehicle is never left flying by surprise: see --on-exit,
+    --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle
+    ended landed and disarmed with the link never lost; 1 when the mission raised, the
+    link was lost or the vehicle did not end landed and disarmed; 2 when an input could
+    not be read or the autopilot never answered; 128+N when stopped by signal N (after
+    the ending).
     """
     settings = project()
     config = FlightConfig(
@@ -103,24 +136,30 @@ def fly_command(
         record=record,
         heartbeat_timeout=heartbeat_timeout,
         failsafe=failsafe,  # type: ignore[arg-type]  (checked by FlightConfig)
+        on_exit=on_exit,  # type: ignore[arg-type]  (checked by FlightConfig)
+        link_timeout=link_timeout,
         signing_key=signing_key,
         allow_remote=allow_remote,
         connect_timeout=connect_timeout,
         behaviors=project_behaviors(behaviors, settings),
         allow_unimplemented=allow_unimplemented,
+        baud=baud,
     )
     printer = [] if quiet else [ActivityLog(on_change=print_row)]
-    try:
-        result = fly(
-            config,
-            observers=printer,
-            on_listening=_listening,
-            on_connected=_connected,
-            announce=error_line,
-        )
-    except KeyboardInterrupt:
-        error_line("aeroexec: interrupted (a flying vehicle was told to brake and hold)")
-        raise typer.Exit(130) from None
+    result = fly(
+        config,
+        observers=printer,
+        on_listening=_listening,
+        on_connected=_connected,
+        announce=error_line,
+    )
     print_summary(result, clock="flown")
     typer.echo(f"mavlink: {result.metadata.get('link_summary', '')}")
+    if result.ending is not None:
+        for action in result.ending.actions:
+            typer.echo(f"ending: {action}")
+        typer.echo(f"ending: vehicle {result.ending.last_seen}")
     finish(result, debug)
+    if not result.safe:
+        error_line(f"aeroexec: {result.problem()}")
+        raise typer.Exit(1)

@@ -11,7 +11,7 @@ import typer
 
 from aeroexec.cli.app import app, guarded
 from aeroexec.mavlink.codec import signing_key as make_key
-from aeroexec.mavlink.endpoint import DEFAULT_VEHICLE_URL, MavlinkError
+from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, MavlinkError
 from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig, refuse_numbers
 
 
@@ -21,7 +21,12 @@ def mavsim_command(
     connect: str = typer.Option(
         DEFAULT_VEHICLE_URL,
         "--connect",
-        help="Where to talk: udpout:HOST:PORT (send to a ground station) or udpin:HOST:PORT.",
+        metavar="URL",
+        help="Where to talk: udpout:HOST:PORT (send to a ground station), udpin:HOST:PORT, "
+        "tcpin:HOST:PORT (listen, as SITL does), tcp:HOST:PORT, or a serial device.",
+    ),
+    baud: int = typer.Option(
+        DEFAULT_BAUD, "--baud", metavar="N", help="Baud rate of a serial device given without one."
     ),
     speed_factor: float = typer.Option(
         1.0, "--speed-factor", help="Vehicle seconds per wall-clock second (tests use 3-5)."
@@ -51,6 +56,22 @@ def mavsim_command(
         None, "--world", help="Simulator world file (limits, start)."
     ),
     system_id: int = typer.Option(1, "--system-id", help="MAVLink system id of the vehicle."),
+    ekf_delay: float = typer.Option(
+        2.0,
+        "--ekf-delay",
+        metavar="SECONDS",
+        help="Vehicle seconds before the EKF has a position (no LOCAL_POSITION_NED, arming "
+        "refused); ArduCopter SITL takes ~40.",
+    ),
+    overshoot: float = typer.Option(
+        0.15,
+        "--overshoot",
+        metavar="METERS",
+        help="How far a position setpoint is overshot before the vehicle creeps back (0: none).",
+    ),
+    rtl_altitude: float = typer.Option(
+        15.0, "--rtl-altitude", metavar="METERS", help="RTL's return altitude (RTL_ALT)."
+    ),
     stats: Path | None = typer.Option(
         None, "--stats", help="At exit, write the message counts (JSON) here ('-': stdout)."
     ),
@@ -58,7 +79,7 @@ def mavsim_command(
         False, "--allow-remote", help="Allow a non-loopback endpoint."
     ),
 ) -> None:
-    """Simulate an ArduCopter in GUIDED mode over MAVLink (UDP), in real time.
+    """Simulate an ArduCopter in GUIDED mode over MAVLink (UDP, TCP or serial), in real time.
 
     Fly a mission against it from another terminal:
 
@@ -84,6 +105,10 @@ def mavsim_command(
             refuse=refused,
             corrupt_every=corrupt_every,
             world=world,
+            ekf_delay=ekf_delay,
+            overshoot=overshoot,
+            rtl_altitude=rtl_altitude,
+            baud=baud,
         )
     except ValueError as exc:
         raise MavlinkError(str(exc)) from None

@@ -153,6 +153,11 @@ class Executive:
         if self.bus.observed:
             self.bus.publish("vehicle/state", self._vehicle_state)
 
+    def publish_vehicle_state(self) -> None:
+        """Publish the vehicle's state now, outside a step: a live session records the
+        state it starts from (its first step comes a tick later)."""
+        self.bus.publish("vehicle/state", self._vehicle_state)
+
     def run_until(self, predicate: Callable[[], bool], timeout_s: float) -> bool:
         """Step until `predicate()` holds (True) or `timeout_s` of clock time pass (False)."""
         deadline = self.clock.now_ns() + round(timeout_s * NS_PER_S)

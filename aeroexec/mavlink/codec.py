@@ -74,19 +74,35 @@ def _classify(detail: str) -> str:
 
 
 class Decoder:
-    """Decodes whole datagrams (or tlog records): each call starts from a clean parser,
-    so a fragment left by one datagram never glues onto the next."""
+    """Decodes whole datagrams (or tlog records) with `feed`: each call starts from a
+    clean parser, so a fragment left by one datagram never glues onto the next. A byte
+    stream (TCP, serial) goes through `feed_stream`, which keeps an incomplete packet for
+    the next call; `reset` forgets it (a new connection)."""
 
     def __init__(self, mav: Any) -> None:
         self.mav = mav
 
     def feed(self, data: bytes) -> tuple[list[MAVLinkMessage], list[Rejected]]:
+        messages, rejected = self._parse(data)
+        leftover = self.mav.buf_len()
+        if leftover > 0:
+            tail = bytes(self.mav.buf[self.mav.buf_index :])
+            rejected.append(
+                Rejected("truncated", tail, f"{leftover} bytes of an incomplete packet")
+            )
+        self.reset()
+        return messages, rejected
+
+    def feed_stream(self, data: bytes) -> tuple[list[MAVLinkMessage], list[Rejected]]:
+        return self._parse(data)
+
+    def _parse(self, data: bytes) -> tuple[list[MAVLinkMessage], list[Rejected]]:
         messages: list[MAVLinkMessage] = []
         rejected: list[Rejected] = []
         try:
             parsed = self.mav.parse_buffer(data) or []
         except Exception as exc:  # pymavlink bug or exotic input: count it, never raise
-            self._reset()
+            self.reset()
             return [], [Rejected("malformed", bytes(data), f"{type(exc).__name__}: {exc}")]
         for msg in parsed:
             if msg.get_type() == "BAD_DATA":
@@ -100,16 +116,9 @@ class Decoder:
                 rejected.append(Rejected("unknown_message", bytes(msg.get_msgbuf()), detail))
             else:
                 messages.append(msg)
-        leftover = self.mav.buf_len()
-        if leftover > 0:
-            tail = bytes(self.mav.buf[self.mav.buf_index :])
-            rejected.append(
-                Rejected("truncated", tail, f"{leftover} bytes of an incomplete packet")
-            )
-        self._reset()
         return messages, rejected
 
-    def _reset(self) -> None:
+    def reset(self) -> None:
         self.mav.buf = bytearray()
         self.mav.buf_index = 0
         self.mav.expected_length = mavlink.HEADER_LEN_V1 + 2

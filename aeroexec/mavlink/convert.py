@@ -35,6 +35,7 @@ COPTER_MODES: dict[int, str] = {
     21: "SMART_RTL",
 }
 GUIDED = 4
+RTL = 6
 LAND = 9
 STABILIZE = 0
 

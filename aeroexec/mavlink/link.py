@@ -1,22 +1,22 @@
-"""A MAVLink link over UDP: one socket, one pymavlink codec, counters and a tap.
+"""A MAVLink link: one transport (UDP, TCP or serial), one pymavlink codec, counters, a tap.
 
-Single-threaded and non-blocking: `poll()` returns whatever datagrams are waiting (or
-waits at most `timeout` seconds for the first one). Every packet sent and every packet
+Single-threaded and non-blocking: `poll()` returns whatever packets are waiting (or
+waits at most `timeout` seconds for the first bytes). Every packet sent and every packet
 received from the peer goes to the tap as `("mavlink/tx" | "mavlink/rx", record)`;
 bytes that are not a usable packet, and datagrams from anyone but the peer, go to
 `mavlink/rejected` (the first `MAX_REJECTED_RECORDS` of them; all are counted).
 
-`udpin` learns its peer: until `lock(address)` is called it accepts datagrams from any
-address; after, only from that one (the vehicle locks onto the sender of the
-autopilot's first heartbeat and unlocks when the link is lost, so a restarted radio or
-autopilot can be found again). `udpout` has its peer fixed from the start.
+Datagrams are decoded one at a time by a clean parser (a fragment never glues onto the
+next datagram); a stream keeps its parser between reads, since a packet may arrive in
+pieces, and starts clean when its connection is reopened. `udpin` learns its peer (see
+`transport.UdpTransport`); the other kinds have one peer by construction.
 """
 
 from __future__ import annotations
 
 import base64
 import select
-import socket
+import time
 from collections import Counter, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -25,16 +25,13 @@ from typing import Any
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from aeroexec.mavlink.codec import Decoder, MAVLinkMessage, Rejected, new_codec, packet_record
-from aeroexec.mavlink.endpoint import Endpoint, MavlinkError
+from aeroexec.mavlink.endpoint import Endpoint
+from aeroexec.mavlink.transport import Address, EventSink, open_transport
 
-Address = tuple[str, int]
 Tap = Callable[[str, Any], None]
 
-MAX_DATAGRAM = 65535
 #: Raw bytes of rejected datagrams are recorded for the first this-many only.
 MAX_REJECTED_RECORDS = 1000
-#: Datagrams read per `poll()` at most, so a flood cannot keep the executive from running.
-MAX_DATAGRAMS_PER_POLL = 2000
 #: How many of the latest packets sent are remembered (see `LinkStats.tail`).
 TAIL_LENGTH = 1024
 
@@ -100,7 +97,11 @@ class Link:
         key: bytes | None = None,
         tap: Tap | None = None,
         corrupt_every: int = 0,
+        on_transport: EventSink | None = None,
+        validate: Callable[[MAVLinkMessage], tuple[str, str] | None] | None = None,
     ) -> None:
+        """`validate(msg)`: (reason, detail) when a well-formed packet is still unusable
+        (non-finite telemetry), else None; such a packet is rejected like a bad one."""
         self.endpoint = endpoint
         self.mav = new_codec(system, component, key)
         self.decoder = Decoder(self.mav)
@@ -109,69 +110,56 @@ class Link:
         self.corrupt_every = corrupt_every
         self._packets_out = 0
         self._rejected_recorded = 0
-        family = socket.AF_INET6 if ":" in endpoint.host else socket.AF_INET
-        self.sock = socket.socket(family, socket.SOCK_DGRAM)
-        try:
-            self.sock.setblocking(False)
-            if endpoint.direction == "udpin":
-                # No SO_REUSEADDR: a second ground station on the same port must fail
-                # loudly, not silently share the vehicle's packets with the first.
-                self.sock.bind(endpoint.address)
-                self.peer: Address | None = None
-                self.locked = False
-            else:
-                loopback = "::1" if family == socket.AF_INET6 else "127.0.0.1"
-                self.sock.bind((loopback, 0) if endpoint.loopback else ("", 0))
-                self.peer = endpoint.address
-                self.locked = True
-        except OSError as exc:
-            self.sock.close()
-            raise MavlinkError(f"cannot open {endpoint.url}: {exc.strerror or exc}") from None
-
-    @property
-    def local_address(self) -> Address:
-        host, port = self.sock.getsockname()[:2]
-        return (host, port)
+        self._on_transport = on_transport
+        self._validate = validate
+        self.transport = open_transport(
+            endpoint, system=system, component=component, on_event=self._transport_event
+        )
 
     @property
     def local_text(self) -> str:
-        """`127.0.0.1:14550` or `[::1]:14550`."""
-        host, port = self.local_address
-        return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+        """`127.0.0.1:14550`, `[::1]:14550`, `/dev/ttyUSB0 at 57600 baud`."""
+        return self.transport.local_text
+
+    @property
+    def up(self) -> bool:
+        """A peer can be reached now (a stream is connected; UDP always)."""
+        return self.transport.up
+
+    def _transport_event(self, event: str, detail: str) -> None:
+        if event == "closed":
+            # A packet cut off by the drop must not glue onto the next connection's bytes.
+            self.decoder.reset()
+        if self._on_transport is not None:
+            self._on_transport(event, detail)
 
     # -- peer ----------------------------------------------------------------------------
     def lock(self, address: Address) -> None:
-        if self.endpoint.direction == "udpin":
-            self.peer = address
-            self.locked = True
+        self.transport.lock(address)
 
     def unlock(self) -> None:
-        """Accept a new peer again (udpin only; udpout's peer is the endpoint)."""
-        if self.endpoint.direction == "udpin":
-            self.locked = False
+        """Accept a new peer again (udpin only; other links have one peer by design)."""
+        self.transport.unlock()
 
     # -- sending -------------------------------------------------------------------------
     def send(self, msg: MAVLinkMessage) -> bool:
         """Pack, sign if keyed, send to the peer; False (and nothing recorded) if there is
-        no peer yet or the socket refused."""
+        no peer yet, the connection is down or the transport refused."""
         kind = msg.get_type()
-        if self.peer is None:
+        if not self.transport.up:
             self.stats.unsent[kind] += 1
             return False
         buf = bytearray(msg.pack(self.mav))
         seq = self.mav.seq
+        self.mav.seq = (seq + 1) % 256
         self._packets_out += 1
         corrupt = self.corrupt_every > 0 and self._packets_out % self.corrupt_every == 0
         if corrupt:
             signed = msg.get_header().incompat_flags & mavlink.MAVLINK_IFLAG_SIGNED
             buf[-14 if signed else -1] ^= 0xFF  # the CRC's high byte
-        try:
-            self.sock.sendto(bytes(buf), self.peer)
-        except OSError:
+        if not self.transport.write(bytes(buf)):
             self.stats.unsent[kind] += 1
             return False
-        finally:
-            self.mav.seq = (seq + 1) % 256
         self.stats.sent[kind] += 1
         self.stats.tail.append((seq, kind, corrupt))
         if corrupt:
@@ -185,34 +173,41 @@ class Link:
 
     # -- receiving -----------------------------------------------------------------------
     def poll(self, timeout: float = 0.0) -> list[Received]:
-        """Everything waiting now; if nothing is, wait up to `timeout` s for a datagram."""
+        """Everything waiting now; if nothing is, wait up to `timeout` s for some bytes."""
         out: list[Received] = []
+        transport = self.transport
         if timeout > 0.0:
-            try:
-                ready, _, _ = select.select([self.sock], [], [], timeout)
-            except (OSError, ValueError):
-                return out
-            if not ready:
-                return out
-        for _ in range(MAX_DATAGRAMS_PER_POLL):
-            try:
-                data, address = self.sock.recvfrom(MAX_DATAGRAM)
-            except (BlockingIOError, InterruptedError):
-                break
-            except OSError:
-                # e.g. ECONNREFUSED from an ICMP "port unreachable" for an earlier send.
-                continue
-            self._datagram(data, (address[0], address[1]), out)
+            fd = transport.fileno()
+            if fd is None:  # a stream that is down: nothing can arrive before it reopens
+                time.sleep(timeout)
+            else:
+                try:
+                    select.select([fd], [], [], timeout)
+                except (OSError, ValueError):
+                    return out
+        for data, address in transport.read():
+            if transport.stream:
+                self._decode(self.decoder.feed_stream(data), address, out)
+            elif not transport.accepts(address):
+                self._reject(Rejected("foreign_address", data, f"from {address[0]}:{address[1]}"))
+            else:
+                self._decode(self.decoder.feed(data), address, out)
         return out
 
-    def _datagram(self, data: bytes, address: Address, out: list[Received]) -> None:
-        if self.locked and address != self.peer:
-            self._reject(Rejected("foreign_address", data, f"from {address[0]}:{address[1]}"))
-            return
-        messages, rejected = self.decoder.feed(data)
+    def _decode(
+        self,
+        decoded: tuple[list[MAVLinkMessage], list[Rejected]],
+        address: Address,
+        out: list[Received],
+    ) -> None:
+        messages, rejected = decoded
         for bad in rejected:
             self._reject(bad)
         for msg in messages:
+            problem = self._validate(msg) if self._validate is not None else None
+            if problem is not None:
+                self._reject(Rejected(problem[0], bytes(msg.get_msgbuf()), problem[1]))
+                continue
             self.stats.received[msg.get_type()] += 1
             out.append(Received(msg, address))
 
@@ -237,7 +232,7 @@ class Link:
         self.stats.ignored[reason] += 1
 
     def close(self) -> None:
-        self.sock.close()
+        self.transport.close()
 
 
 def _b64(data: bytes) -> str:

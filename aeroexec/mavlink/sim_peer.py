@@ -1,11 +1,26 @@
 """`MavSim`: the simulated vehicle (`SimVehicle`) behind an ArduCopter-like MAVLink face.
 
 It speaks the part of ArduCopter's protocol that aeroexec's GUIDED-mode backend uses, over
-UDP, in real time: HEARTBEAT at 1 Hz, LOCAL_POSITION_NED and ATTITUDE at 10 Hz,
-SYS_STATUS and EXTENDED_SYS_STATE at 2 Hz (EXTENDED_SYS_STATE also when the landed state
-changes), a COMMAND_ACK for every COMMAND_LONG and SET_MODE, and ArduCopter's refusals:
-take-off while disarmed, not in GUIDED or already flying; arming in LAND mode; disarming
-in the air; yaw commands on the ground or outside GUIDED; unknown modes and commands.
+any link aeroexec speaks (UDP, TCP either side, a serial port), in real time: HEARTBEAT
+at 1 Hz, LOCAL_POSITION_NED and ATTITUDE at 10 Hz, SYS_STATUS and EXTENDED_SYS_STATE at
+2 Hz (EXTENDED_SYS_STATE also when the landed state changes), a COMMAND_ACK for every
+COMMAND_LONG and SET_MODE.
+
+Where it matters for tests it behaves as ArduCopter 4.5 SITL was measured to:
+
+* the EKF is not ready for `ekf_delay` vehicle seconds after start (SITL: ~40 s): no
+  LOCAL_POSITION_NED yet, and arming is refused (FAILED, with an "Arm:" STATUSTEXT);
+* the answers: FAILED for take-off while disarmed, not in GUIDED, already flying or to
+  a non-positive altitude, for arming in flight and disarming in the air, for unknown
+  modes; DENIED for a message interval of an unknown message; UNSUPPORTED for unknown
+  commands; CONDITION_YAW is ACCEPTED in any mode, on the ground too (and does nothing
+  there);
+* a position setpoint overshoots: the vehicle passes the goal, stops `overshoot` metres
+  beyond it and creeps back at `creep_speed` (SITL: 10-20 cm past after a few metres at
+  ~3 m/s, back at 3-8 cm/s);
+* RTL climbs to `rtl_altitude` (ArduCopter's RTL_ALT, 15 m), flies home (where it armed)
+  and lands.
+
 Setpoints (SET_POSITION_TARGET_LOCAL_NED) are obeyed only in GUIDED while flying, as
 ArduCopter does; a velocity setpoint lapses after 3 s without a new one.
 
@@ -18,6 +33,7 @@ station sees a consistent, just faster, aircraft).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import time
@@ -34,6 +50,7 @@ from aeroexec.mavlink.convert import (
     COPTER_MODES,
     GUIDED,
     LAND,
+    RTL,
     STABILIZE,
     enu_to_ned,
     ned_to_enu,
@@ -41,12 +58,12 @@ from aeroexec.mavlink.convert import (
     yaw_enu_to_ned,
     yaw_ned_to_enu,
 )
-from aeroexec.mavlink.endpoint import DEFAULT_VEHICLE_URL, parse_endpoint
+from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, parse_endpoint
 from aeroexec.mavlink.link import Link
-from aeroexec.vehicles.base import VehicleCommandError
+from aeroexec.vehicles.base import Vec3, VehicleCommandError
 
-#: Modes mavsim can be put in; in the air all but LAND brake and hold.
-SUPPORTED_MODES = (STABILIZE, GUIDED, 5, LAND, 16, 17)  # + LOITER, POSHOLD, BRAKE
+#: Modes mavsim can be put in; in the air all but LAND and RTL brake and hold.
+SUPPORTED_MODES = (STABILIZE, GUIDED, 5, RTL, LAND, 16, 17)  # + LOITER, POSHOLD, BRAKE
 VELOCITY_TIMEOUT = 3.0  # s: ArduCopter's GUIDED velocity-setpoint timeout
 FORCE_DISARM = 21196.0  # param2 magic of MAV_CMD_COMPONENT_ARM_DISARM
 #: Default telemetry rates (Hz) by message id.
@@ -58,6 +75,9 @@ DEFAULT_RATES: dict[int, float] = {
     mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 2.0,
 }
 LOOP_PERIOD = 0.005  # s: how often the loop wakes at most
+#: Within this distance (m) of an overshoot point or an RTL stage's target, it counts as
+#: reached.
+REACHED = 0.02
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +103,16 @@ class MavSimConfig:
     #: Corrupt (flip a CRC byte of) every Nth packet sent; 0: never.
     corrupt_every: int = 0
     world: str | Path | None = None
+    #: Vehicle seconds from start until the EKF has a position (SITL: ~40).
+    ekf_delay: float = 2.0
+    #: Metres a position setpoint is overshot before the vehicle creeps back (0: none).
+    overshoot: float = 0.15
+    #: m/s (vehicle time) of the creep back from an overshoot.
+    creep_speed: float = 0.05
+    #: RTL's return altitude (ArduCopter's RTL_ALT), metres.
+    rtl_altitude: float = 15.0
+    #: Serial devices given without `,BAUD`.
+    baud: int = DEFAULT_BAUD
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.speed_factor) and self.speed_factor > 0):
@@ -95,6 +125,12 @@ class MavSimConfig:
             raise ValueError(f"corrupt-every must be >= 0, got {self.corrupt_every}")
         if self.drop_for < 0:
             raise ValueError(f"drop-for must be >= 0, got {self.drop_for}")
+        for name in ("ekf_delay", "overshoot", "rtl_altitude"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name.replace('_', '-')} must be >= 0, got {value}")
+        if not (math.isfinite(self.creep_speed) and self.creep_speed > 0):
+            raise ValueError(f"creep-speed must be positive, got {self.creep_speed}")
 
 
 def refuse_numbers(names: list[str] | tuple[str, ...]) -> tuple[int, ...]:
@@ -121,7 +157,9 @@ class MavSim:
         from aeroexec.vehicles.world import default_world, load_world
 
         self.config = config if config is not None else MavSimConfig()
-        self.endpoint = parse_endpoint(self.config.url, allow_remote=self.config.allow_remote)
+        self.endpoint = parse_endpoint(
+            self.config.url, allow_remote=self.config.allow_remote, baud=self.config.baud
+        )
         world = load_world(self.config.world) if self.config.world else default_world()
         self.sim = SimVehicle(world)
         self.link = Link(
@@ -146,6 +184,13 @@ class MavSim:
         self._velocity_at: float | None = None
         self._last_result: tuple[int, int] | None = None  # (command, result)
         self.gcs: tuple[int, int] | None = None
+        #: A position setpoint being overshot: (goal, overshoot point, creep start time
+        #: in vehicle seconds or None while still flying out).
+        self._overshoot: tuple[Vec3, Vec3, float | None] | None = None
+        #: RTL: "climb", "return" or "land"; None outside RTL.
+        self._rtl_stage: str | None = None
+        self._home: Vec3 = self.sim.state().position
+        self._ekf_announced = False
 
     # -- running -------------------------------------------------------------------------
     @property
@@ -199,15 +244,67 @@ class MavSim:
         ):
             self._velocity_at = None
             self.sim.hover()
+        if self._overshoot is not None:
+            self._follow_overshoot()
+        if self._rtl_stage is not None:
+            self._follow_rtl()
+        if self.ekf_ready and not self._ekf_announced:
+            self._ekf_announced = True
+            self._statustext(mavlink.MAV_SEVERITY_INFO, "EKF3 IMU0 is using GPS")
         landed = self._landed()
         if landed != self._landed_state:
             self._landed_state = landed
             self._send_extended_sys_state()
 
+    @property
+    def ekf_ready(self) -> bool:
+        """The EKF has a position (SITL: GPS in use, ~40 s after boot)."""
+        return self.sim.time >= self.config.ekf_delay
+
+    def _follow_overshoot(self) -> None:
+        goal, beyond, creep_from = self._overshoot  # type: ignore[misc]
+        now = self.sim.time
+        if creep_from is None:
+            if math.dist(self.sim.state().position, beyond) <= REACHED:
+                self._overshoot = (goal, beyond, now)
+            return
+        gone = self.config.creep_speed * (now - creep_from)
+        span = math.dist(goal, beyond)
+        if gone >= span:
+            self._overshoot = None
+            self._sim_command(self.sim.go_to, *goal)
+            return
+        f = gone / span
+        self._sim_command(
+            self.sim.go_to, *(b + (g - b) * f for g, b in zip(goal, beyond, strict=True))
+        )
+
+    def _follow_rtl(self) -> None:
+        x, y, z = self.sim.state().position
+        hx, hy, _ = self._home
+        if not self.flying:
+            self._rtl_stage = None
+            return
+        if self._rtl_stage == "climb":
+            target = max(z, self.config.rtl_altitude)
+            if abs(z - target) <= REACHED:
+                self._rtl_stage = "return"
+                self._sim_command(self.sim.go_to, hx, hy, z)
+            else:
+                self._sim_command(self.sim.go_to, x, y, target)
+        elif self._rtl_stage == "return" and math.hypot(x - hx, y - hy) <= REACHED:
+            self._rtl_stage = "land"
+            self._sim_command(self.sim.land)
+
+    def _sim_command(self, command: Callable[..., None], *args: float) -> None:
+        # The model may refuse (an empty battery): it then does what it must instead.
+        with contextlib.suppress(VehicleCommandError):
+            command(*args)
+
     def _landed(self) -> int:
         if not self.flying:
             return mavlink.MAV_LANDED_STATE_ON_GROUND
-        if self.mode == LAND:
+        if self.mode == LAND or self._rtl_stage == "land":
             return mavlink.MAV_LANDED_STATE_LANDING
         return mavlink.MAV_LANDED_STATE_IN_AIR
 
@@ -223,6 +320,8 @@ class MavSim:
         if message_id == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
             self._send_heartbeat()
         elif message_id == mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED:
+            if not self.ekf_ready:
+                return  # no position estimate yet: ArduPilot sends none
             state = self.sim.state()
             k = self.config.speed_factor
             x, y, z = enu_to_ned(state.position)
@@ -292,6 +391,9 @@ class MavSim:
             )
         )
 
+    def _statustext(self, severity: int, text: str) -> None:
+        self._send(mavlink.MAVLink_statustext_message(severity, text.encode("ascii")[:50]))
+
     def _send(self, msg: MAVLinkMessage) -> None:
         self.link.send(msg)
 
@@ -357,9 +459,13 @@ class MavSim:
             if msg.param1 >= 0.5:
                 if self.armed:
                     return ok
+                if not self.ekf_ready:
+                    self._statustext(mavlink.MAV_SEVERITY_CRITICAL, "Arm: Need Position Estimate")
+                    return failed
                 if self.mode == LAND or self.in_flight or self.sim.state().battery <= 0.0:
                     return failed
                 self.armed = True
+                self._home = self.sim.state().position
                 return ok
             if self.in_flight and msg.param2 != FORCE_DISARM:
                 return failed
@@ -382,8 +488,10 @@ class MavSim:
         if command == mavlink.MAV_CMD_NAV_LAND:
             return self._enter_mode(LAND)
         if command == mavlink.MAV_CMD_CONDITION_YAW:
-            if self.mode != GUIDED or not self.flying or not math.isfinite(msg.param1):
+            if not (math.isfinite(msg.param1) and 0.0 <= msg.param1 <= 360.0):
                 return failed
+            if self.mode != GUIDED or not self.flying:
+                return ok  # ArduCopter accepts it anywhere; it turns only in GUIDED flight
             heading = math.radians(msg.param1)
             if msg.param4 >= 0.5:  # relative: param3 gives the direction
                 sign = -1.0 if msg.param3 < 0 else 1.0
@@ -395,8 +503,13 @@ class MavSim:
             return ok
         if command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
             message_id, interval = int(msg.param1), float(msg.param2)
+            if message_id not in mavlink.mavlink_map:
+                self._statustext(
+                    mavlink.MAV_SEVERITY_INFO, f"No ap_message for mavlink id ({message_id})"
+                )
+                return mavlink.MAV_RESULT_DENIED
             if message_id not in DEFAULT_RATES or message_id == mavlink.MAVLINK_MSG_ID_HEARTBEAT:
-                return mavlink.MAV_RESULT_UNSUPPORTED if message_id not in DEFAULT_RATES else ok
+                return ok
             if interval < 0:
                 self._rates[message_id] = 0.0
             elif interval == 0:
@@ -413,13 +526,19 @@ class MavSim:
 
     def _enter_mode(self, mode: int) -> int:
         if mode not in SUPPORTED_MODES:
+            self._statustext(mavlink.MAV_SEVERITY_WARNING, f"No such mode {mode}")
             return mavlink.MAV_RESULT_FAILED
         self.mode = mode
         self._velocity_at = None
+        self._overshoot = None
+        self._rtl_stage = None
         if self.flying:
             try:
                 if mode == LAND:
                     self.sim.land()
+                elif mode == RTL:
+                    self._rtl_stage = "climb"
+                    self.sim.hover()
                 else:
                     self.sim.hover()  # GUIDED, LOITER, BRAKE...: stop and hold
             except VehicleCommandError:
@@ -442,9 +561,10 @@ class MavSim:
             if not mask & 0b111:  # position used
                 self.counters.setpoints["position"] += 1
                 self._velocity_at = None
-                self.sim.go_to(*ned_to_enu((msg.x, msg.y, msg.z)))
+                self._go_to(ned_to_enu((msg.x, msg.y, msg.z)))
             elif not mask & 0b111000:  # velocity used
                 self.counters.setpoints["velocity"] += 1
+                self._overshoot = None
                 vx, vy, vz = ned_to_enu((msg.vx, msg.vy, msg.vz))
                 if vx == 0.0 and vy == 0.0 and vz == 0.0:
                     self._velocity_at = None
@@ -454,6 +574,23 @@ class MavSim:
                     self.sim.set_velocity(*self._clamp(vx / k, vy / k, vz / k))
         except VehicleCommandError:
             self.counters.ignored_setpoints += 1
+
+    def _go_to(self, goal: Vec3) -> None:
+        """Fly to `goal`, overshooting it as ArduCopter does when it arrives at speed."""
+        if self._overshoot is not None and self._overshoot[0] == goal:
+            return  # the same setpoint again (a behavior re-aiming): the approach goes on
+        here = self.sim.state().position
+        distance = math.dist(here, goal)
+        over = self.config.overshoot
+        if goal[2] < 0.0 or over <= 0.0 or distance <= 2.0 * over:
+            self._overshoot = None
+            self.sim.go_to(*goal)
+            return
+        beyond = tuple(g + (g - h) / distance * over for g, h in zip(goal, here, strict=True))
+        if beyond[2] < 0.0:  # never overshoot into the ground
+            beyond = (beyond[0], beyond[1], goal[2])
+        self.sim.go_to(*beyond)
+        self._overshoot = (goal, (beyond[0], beyond[1], beyond[2]), None)
 
     def _clamp(self, vx: float, vy: float, vz: float) -> tuple[float, float, float]:
         limits = self.sim.world.limits

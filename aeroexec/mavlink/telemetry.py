@@ -9,6 +9,7 @@ Frames are converted here, once (see `aeroexec.mavlink.convert`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
@@ -24,6 +25,27 @@ _AIRBORNE_STATES = (
     mavlink.MAV_LANDED_STATE_TAKEOFF,
     mavlink.MAV_LANDED_STATE_LANDING,
 )
+
+
+#: The messages `Telemetry.apply` folds into the state.
+USED = frozenset(
+    {"HEARTBEAT", "LOCAL_POSITION_NED", "ATTITUDE", "SYS_STATUS", "EXTENDED_SYS_STATE"}
+)
+
+
+def unbelievable(msg: MAVLinkMessage) -> tuple[str, str] | None:
+    """("non_finite", "LOCAL_POSITION_NED: x=nan") when a message that would feed the
+    state carries a NaN or an infinity in any field, else None. Other messages may carry
+    NaN on purpose (MAVLink's "no value"), so they are not judged."""
+    kind = msg.get_type()
+    if kind not in USED:
+        return None
+    bad = [
+        f"{name}={value}"
+        for name in msg.get_fieldnames()
+        if isinstance(value := getattr(msg, name), float) and not math.isfinite(value)
+    ]
+    return ("non_finite", f"{kind}: {', '.join(bad)}") if bad else None
 
 
 def is_autopilot_heartbeat(msg: MAVLinkMessage) -> bool:

@@ -9,10 +9,15 @@ raises `VehicleCommandError("MAV_CMD_NAV_TAKEOFF refused: TEMPORARILY_REJECTED")
 Setpoints (`go_to`, `set_velocity`, `hover`) are SET_POSITION_TARGET_LOCAL_NED, which
 MAVLink never acknowledges: they are checked against the mode and state first.
 
-Link health: when no autopilot heartbeat arrived for `heartbeat_timeout` seconds the link
-is lost: `state().fault == "link_lost"`, every command raises, and a `mavlink/link`
-event is published. When heartbeats come back, the configured failsafe runs (`hold`:
-brake and hold where the vehicle is; `land`: switch to LAND).
+Link health: when no autopilot heartbeat arrived for `heartbeat_timeout` seconds, or a
+TCP or serial connection closed, the link is lost: `state().fault == "link_lost"`, every
+command raises, and a `mavlink/link` event is published. When heartbeats come back, the
+configured failsafe runs (`hold`: brake and hold where the vehicle is; `land`: switch to
+LAND; `rtl`: switch to RTL). With `link_timeout`, a link lost for longer than that makes
+`step()` raise `LinkTimeout`, which ends the flight (see `aeroexec.mission.ending`).
+The ground station's own HEARTBEAT (every second, and once per autopilot heartbeat) is
+what ArduPilot's GCS failsafe (`FS_GCS_ENABLE`) watches: when aeroexec dies, the
+autopilot acts on its own.
 
 Every packet in and out is handed to `tap(topic, payload)` (wired to the executive's
 bus by `aeroexec.mission.live.fly`); until a tap is attached the vehicle keeps them and
@@ -29,22 +34,26 @@ from typing import Any, Literal
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from aeroexec.interrupts import check as check_interrupts
 from aeroexec.mavlink.codec import MAVLinkMessage, command_name, result_name
 from aeroexec.mavlink.convert import (
     GUIDED,
     LAND,
+    RTL,
     enu_to_ned,
     heading_degrees,
     mode_name,
     yaw_enu_to_ned,
 )
-from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
+from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL, MavlinkError, parse_endpoint
 from aeroexec.mavlink.link import Link, LinkStats, Received
-from aeroexec.mavlink.telemetry import Telemetry, is_autopilot_heartbeat
+from aeroexec.mavlink.telemetry import Telemetry, is_autopilot_heartbeat, unbelievable
 from aeroexec.vehicles.base import VehicleCommandError, VehicleState
 
-Failsafe = Literal["hold", "land"]
-FAILSAFES: tuple[Failsafe, ...] = ("hold", "land")
+Failsafe = Literal["land", "hold", "rtl"]
+FAILSAFES: tuple[Failsafe, ...] = ("land", "hold", "rtl")
+#: Modes in which the autopilot brings the vehicle down by itself.
+DESCENDING_MODES = frozenset({LAND, RTL, 21})  # 21: SMART_RTL
 Tap = Callable[[str, Any], None]
 
 #: Messages (and rates, Hz) requested from the autopilot with MAV_CMD_SET_MESSAGE_INTERVAL.
@@ -54,6 +63,9 @@ STREAMS: tuple[tuple[int, float], ...] = (
     (mavlink.MAVLINK_MSG_ID_SYS_STATUS, 2.0),
     (mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, 2.0),
 )
+#: The ground station's HEARTBEAT: at least every `gcs_heartbeat_period`, and once per
+#: autopilot heartbeat, but never more often than this (Hz).
+GCS_HEARTBEAT_MAX_HZ = 20.0
 #: Traffic kept while no tap is attached (beyond it, only counted).
 MAX_BUFFERED = 100_000
 
@@ -82,6 +94,17 @@ VELOCITY_MASK = (
 )
 
 
+class LinkTimeout(BaseException):
+    """The link stayed lost longer than `link_timeout`: the flight cannot go on.
+
+    A `BaseException`, like `KeyboardInterrupt`: a mission's `except Exception:` must not
+    keep a flight running without a link."""
+
+    def __init__(self, silent_s: float) -> None:
+        self.silent_s = silent_s
+        super().__init__(f"link lost for {silent_s:.1f} s")
+
+
 @dataclass(frozen=True, slots=True)
 class MavlinkConfig:
     url: str = DEFAULT_GCS_URL
@@ -89,7 +112,11 @@ class MavlinkConfig:
     #: 32-byte MAVLink 2 signing key (see `codec.signing_key`), or None for no signing.
     signing_key: bytes | None = None
     heartbeat_timeout: float = 3.0
-    failsafe: Failsafe = "hold"
+    failsafe: Failsafe = "land"
+    #: A link lost this long (s) ends the flight (`LinkTimeout` from `step`); None: never.
+    link_timeout: float | None = None
+    #: Serial devices given without `,BAUD`.
+    baud: int = DEFAULT_BAUD
     ack_timeout: float = 1.0
     retries: int = 2
     connect_timeout: float = 10.0
@@ -108,6 +135,12 @@ class MavlinkConfig:
             raise ValueError(f"heartbeat timeout must be positive, got {self.heartbeat_timeout}")
         if self.failsafe not in FAILSAFES:
             raise ValueError(f"failsafe must be one of {', '.join(FAILSAFES)}")
+        if self.link_timeout is not None and not (
+            math.isfinite(self.link_timeout) and self.link_timeout >= 0
+        ):
+            raise ValueError(f"link timeout must be >= 0 seconds, got {self.link_timeout}")
+        if self.baud <= 0:
+            raise ValueError(f"baud rate must be positive, got {self.baud}")
         if not (math.isfinite(self.ack_timeout) and self.ack_timeout > 0):
             raise ValueError(f"ack timeout must be positive, got {self.ack_timeout}")
         if self.retries < 0:
@@ -129,7 +162,9 @@ class MavlinkVehicle:
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.config = config if config is not None else MavlinkConfig()
-        self.endpoint = parse_endpoint(self.config.url, allow_remote=self.config.allow_remote)
+        self.endpoint = parse_endpoint(
+            self.config.url, allow_remote=self.config.allow_remote, baud=self.config.baud
+        )
         self._clock = clock
         self._start = clock()
         self._tap: Tap | None = tap
@@ -141,6 +176,8 @@ class MavlinkVehicle:
             component=self.config.component,
             key=self.config.signing_key,
             tap=self._emit,
+            on_transport=self._transport_event,
+            validate=unbelievable,
         )
         self.telemetry = Telemetry()
         #: (system, component) of the autopilot, once its first heartbeat arrived.
@@ -148,12 +185,15 @@ class MavlinkVehicle:
         self._last_heartbeat = -math.inf
         self.link_lost = False
         self.link_losses = 0
+        #: When the current loss began (the last heartbeat before it), or None.
+        self.lost_since: float | None = None
         self._failsafe_pending = False
         self._acks: list[MAVLinkMessage] = []
         self._commanded_mode: int | None = None
         self._yaw_target_ned: float | None = None
         self._velocity_ned: tuple[float, float, float] | None = None
         self._next_gcs_heartbeat = -math.inf
+        self._last_gcs_heartbeat = -math.inf
         self._next_velocity = math.inf
         self._streams_requested = False
 
@@ -200,6 +240,7 @@ class MavlinkVehicle:
         limit = self.config.connect_timeout if timeout is None else timeout
         deadline = self._clock() + limit
         while self.target is None or self.telemetry.positions == 0:
+            check_interrupts()  # an operator may give up on a vehicle that never answers
             remaining = deadline - self._clock()
             if remaining <= 0:
                 raise MavlinkError(self._no_connection_text(limit))
@@ -217,6 +258,12 @@ class MavlinkVehicle:
         )
 
     def _no_connection_text(self, limit: float) -> str:
+        transport = self.link.transport
+        if self.endpoint.stream and not transport.up and self.target is None:
+            what = "client on" if self.endpoint.kind == "tcpin" else "connection to"
+            text = f"no {what} {self.endpoint.url} within {limit:g} s"
+            error = getattr(transport, "last_error", "")
+            return f"{text} ({error})" if error else text
         if self.target is None:
             text = f"no heartbeat from {self.endpoint.url} within {limit:g} s"
         else:
@@ -276,6 +323,11 @@ class MavlinkVehicle:
         if self._failsafe_pending and not self.link_lost:
             self._failsafe_pending = False
             self._run_failsafe()
+        limit = self.config.link_timeout
+        if limit is not None and self.lost_since is not None:
+            silent = self._clock() - self.lost_since
+            if silent > limit:
+                raise LinkTimeout(silent)
 
     def _process(self, received: list[Received]) -> None:
         for item in received:
@@ -319,36 +371,59 @@ class MavlinkVehicle:
     def _heartbeat(self, item: Received) -> None:
         self.telemetry.apply(item.msg)
         self._last_heartbeat = self._clock()
+        # Answer each autopilot heartbeat with ours (at most GCS_HEARTBEAT_MAX_HZ): an
+        # autopilot that beats faster than 1 Hz runs faster than the wall clock (SITL
+        # with a speed-up), and its GCS failsafe (FS_GCS_TIMEOUT) counts on its clock.
+        if self._last_heartbeat - self._last_gcs_heartbeat >= 1.0 / GCS_HEARTBEAT_MAX_HZ:
+            self._beat(self._last_heartbeat)
         if self.link_lost:
+            silent = self._last_heartbeat - (self.lost_since or self._last_heartbeat)
             self.link_lost = False
+            self.lost_since = None
             self.link.lock(item.address)
             self._failsafe_pending = True
-            self._event("restored", failsafe=self.config.failsafe)
+            self._event("restored", failsafe=self.config.failsafe, silent_s=round(silent, 3))
+
+    def _transport_event(self, event: str, detail: str) -> None:
+        self._event("connection", state=event, detail=detail)
+        if event == "closed" and self.target is not None and not self.link_lost:
+            # A closed TCP connection or a vanished serial port is a loss at once: no
+            # heartbeat can arrive until it is reopened.
+            self._lose(detail)
+
+    def _lose(self, why: str) -> None:
+        now = self._clock()
+        self.link_lost = True
+        self.link_losses += 1
+        self.lost_since = self._last_heartbeat if math.isfinite(self._last_heartbeat) else now
+        self._velocity_ned = None  # the autopilot drops it too; never resumed
+        self.link.unlock()
+        self._event("lost", silent_s=round(now - self.lost_since, 3), why=why)
+
+    def _beat(self, now: float) -> None:
+        self.link.send(
+            mavlink.MAVLink_heartbeat_message(
+                mavlink.MAV_TYPE_GCS,
+                mavlink.MAV_AUTOPILOT_INVALID,
+                0,
+                0,
+                mavlink.MAV_STATE_ACTIVE,
+                3,
+            )
+        )
+        self._last_gcs_heartbeat = now
+        self._next_gcs_heartbeat = now + self.config.gcs_heartbeat_period
 
     def _service(self) -> None:
         now = self._clock()
         if now >= self._next_gcs_heartbeat:
-            self.link.send(
-                mavlink.MAVLink_heartbeat_message(
-                    mavlink.MAV_TYPE_GCS,
-                    mavlink.MAV_AUTOPILOT_INVALID,
-                    0,
-                    0,
-                    mavlink.MAV_STATE_ACTIVE,
-                    3,
-                )
-            )
-            self._next_gcs_heartbeat = now + self.config.gcs_heartbeat_period
+            self._beat(now)
         if (
             self.target is not None
             and not self.link_lost
             and now - self._last_heartbeat > self.config.heartbeat_timeout
         ):
-            self.link_lost = True
-            self.link_losses += 1
-            self._velocity_ned = None  # the autopilot drops it too; never resumed
-            self.link.unlock()
-            self._event("lost", silent_s=round(now - self._last_heartbeat, 3))
+            self._lose("no heartbeat")
         if self._velocity_ned is not None and now >= self._next_velocity and not self.link_lost:
             self._send_velocity(self._velocity_ned)
 
@@ -360,9 +435,13 @@ class MavlinkVehicle:
         try:
             if self.config.failsafe == "land":
                 self._set_mode(LAND)
-            else:
+            elif self.config.failsafe == "rtl":
+                self._set_mode(RTL)
+            elif self.telemetry.custom_mode == GUIDED:
                 self._brake()
-            self._event("failsafe", action=self.config.failsafe)
+            # hold outside GUIDED: the autopilot's own failsafe (LAND, RTL) or a pilot
+            # has the vehicle; a setpoint would be ignored, and taking over is not ours.
+            self._event("failsafe", action=self.config.failsafe, mode=self.telemetry.mode)
         except VehicleCommandError as exc:
             self._event("failsafe", action=self.config.failsafe, error=str(exc))
             self._log(f"failsafe {self.config.failsafe} failed: {exc}", "ERROR")
@@ -534,6 +613,62 @@ class MavlinkVehicle:
                 0.0,
             )
         )
+
+    # -- endings (see aeroexec.mission.ending) -------------------------------------------
+    @property
+    def descending(self) -> bool:
+        """The autopilot is bringing the vehicle down by itself (LAND, RTL, SMART_RTL)."""
+        return self.telemetry.custom_mode in DESCENDING_MODES
+
+    @property
+    def in_commanded_mode(self) -> bool:
+        """The autopilot is in the mode aeroexec last commanded (not a pilot's, nor one
+        its own failsafe chose, nor the one it had when aeroexec connected)."""
+        return self._commanded_mode is not None and (
+            self.telemetry.custom_mode == self._commanded_mode
+        )
+
+    @property
+    def down(self) -> bool:
+        """Landed and disarmed, as last heard."""
+        return not self.telemetry.flying and not self.telemetry.armed
+
+    def bring_down(self) -> str:
+        """LAND, unless the autopilot is already landing or returning; what was done."""
+        if self.descending:
+            return f"left it in {self.telemetry.mode}"
+        self._velocity_ned = None
+        self._require_link("land")
+        self._set_mode(LAND)
+        return "switched to LAND"
+
+    def hold_here(self) -> str:
+        """Brake and hold in GUIDED; in any other mode the autopilot keeps what it does."""
+        if self.telemetry.custom_mode != GUIDED:
+            return f"left it in {self.telemetry.mode}"
+        self._brake()
+        return "braked to hold in GUIDED"
+
+    def disarm(self) -> None:
+        """Disarm on the ground (never forced: the autopilot refuses in the air)."""
+        self._command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0.0,))
+        self.telemetry.armed = False
+
+    def silent_for(self) -> float:
+        """Seconds since the autopilot's last heartbeat (inf before the first)."""
+        return self._clock() - self._last_heartbeat
+
+    def last_seen(self) -> str:
+        """The vehicle as last heard: "flying at (3.00, 5.50, 1.30) m in GUIDED, armed"
+        (with "N s ago" when the link is lost)."""
+        t = self.telemetry
+        x, y, z = self.state().position
+        where = f"at ({x:.2f}, {y:.2f}, {z:.2f}) m"
+        what = "flying" if t.flying else "on the ground"
+        text = f"{what} {where} in {t.mode}, {'armed' if t.armed else 'disarmed'}"
+        if self.link_lost or self.target is None:
+            text += f", {self.silent_for():.1f} s ago"
+        return text
 
     # -- reporting -----------------------------------------------------------------------
     def describe(self) -> str:

@@ -1,7 +1,8 @@
 """A live session: catalog + MAVLink autopilot + mission script -> outcome (+ recording).
 
 `fly()` is what `aeroexec fly` does: the live counterpart of `session.simulate()`. The
-same executive core and behavior library run on the wall clock (`WallClock`) against a
+same executive core and behavior library run on the wall clock (`WallClock`, started
+when the link is up: time 0 is the first moment the executive could act) against a
 `MavlinkVehicle`; every MAVLink packet exchanged is published on the executive's bus
 (`mavlink/tx`, `mavlink/rx`, plus `mavlink/rejected` and `mavlink/link`), so the
 recorder writes it beside the executive's own channels.
@@ -10,10 +11,15 @@ Vehicle faults: a lost link or a mode the pilot (or the autopilot's own failsafe
 switched to ends the running motion behaviors at once with `PROCESS_FAILURE`
 ("vehicle fault: link_lost"): the behavior base class does it for every behavior that
 lists those faults in `fails_on_faults` (all motion behaviors and LAND).
+
+Endings: however the mission ends (returned, raised, SIGINT/SIGTERM/SIGHUP, a link lost
+longer than `link_timeout`), `aeroexec.mission.ending.end_flight` brings the vehicle to
+the `on_exit` policy before the link is closed and the recording gets its footer.
 """
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,11 +31,19 @@ from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import WallClock
 from aeroexec.executive.executive import Executive
+from aeroexec.interrupts import Interrupted
 from aeroexec.mavlink.codec import signing_key
-from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
-from aeroexec.mavlink.vehicle import FAILSAFES, Failsafe, MavlinkConfig, MavlinkVehicle
+from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL, MavlinkError, parse_endpoint
+from aeroexec.mavlink.vehicle import (
+    FAILSAFES,
+    Failsafe,
+    LinkTimeout,
+    MavlinkConfig,
+    MavlinkVehicle,
+)
 from aeroexec.mission.api import MissionAPI
-from aeroexec.mission.script import MissionScript, load_mission, run_script
+from aeroexec.mission.ending import ON_EXIT, Ending, OnExit, end_flight
+from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.mission.session import (
     SessionResult,
     session_code,
@@ -37,7 +51,6 @@ from aeroexec.mission.session import (
     stand_in_metadata,
 )
 from aeroexec.plugins.discovery import BehaviorSet
-from aeroexec.vehicles.base import VehicleCommandError
 
 
 @dataclass(frozen=True)
@@ -48,7 +61,12 @@ class FlightConfig:
     record: str | Path | None = None
     drone: str = "drone1"
     heartbeat_timeout: float = 3.0
-    failsafe: Failsafe = "hold"
+    #: What to do when a lost link comes back: land, hold or rtl.
+    failsafe: Failsafe = "land"
+    #: How the flight ends when the mission is over: land, hold or none.
+    on_exit: OnExit = "land"
+    #: A link lost this long (s) ends the mission; the ending waits that long for it too.
+    link_timeout: float = 30.0
     #: `--signing-key`: 64 hex digits, or a passphrase (hashed with SHA-256).
     signing_key: str | None = None
     allow_remote: bool = False
@@ -59,6 +77,8 @@ class FlightConfig:
     behaviors: BehaviorSet | None = None
     #: Fly catalog behaviors without an implementation as announced stand-ins.
     allow_unimplemented: bool = False
+    #: Serial devices given without `,BAUD`.
+    baud: int = DEFAULT_BAUD
 
     def vehicle_config(self) -> MavlinkConfig:
         """The vehicle's configuration; `MavlinkError` for values that cannot work."""
@@ -70,6 +90,8 @@ class FlightConfig:
                 raise MavlinkError(f"--signing-key: {exc}") from None
         if self.failsafe not in FAILSAFES:
             raise MavlinkError(f"--failsafe must be one of {', '.join(FAILSAFES)}")
+        if self.on_exit not in ON_EXIT:
+            raise MavlinkError(f"--on-exit must be one of {', '.join(ON_EXIT)}")
         try:
             return MavlinkConfig(
                 url=self.connect,
@@ -77,12 +99,38 @@ class FlightConfig:
                 signing_key=key,
                 heartbeat_timeout=self.heartbeat_timeout,
                 failsafe=self.failsafe,
+                link_timeout=self.link_timeout,
+                baud=self.baud,
                 connect_timeout=self.connect_timeout,
                 ack_timeout=self.ack_timeout,
                 retries=self.retries,
             )
         except ValueError as exc:
             raise MavlinkError(str(exc)) from None
+
+
+@dataclass(frozen=True)
+class FlightResult(SessionResult):
+    #: How the flight ended (see `aeroexec.mission.ending`).
+    ending: Ending | None = None
+    link_losses: int = 0
+
+    @property
+    def safe(self) -> bool:
+        """The vehicle ended landed and disarmed, and the link never dropped."""
+        return self.ending is not None and self.ending.down and self.link_losses == 0
+
+    def problem(self) -> str:
+        """Why the flight is not `safe`, in one line ("" when it is)."""
+        if self.safe or self.ending is None:
+            return ""
+        if self.ending.down:
+            losses = self.link_losses
+            return (
+                f"the link was lost {losses} time{'s' if losses > 1 else ''} during the "
+                f"flight; vehicle {self.ending.last_seen}"
+            )
+        return self.ending.line()
 
 
 def fly(
@@ -95,25 +143,31 @@ def fly(
     on_listening: Callable[[MavlinkVehicle], None] | None = None,
     on_connected: Callable[[MavlinkVehicle], None] | None = None,
     announce: Callable[[str], None] | None = None,
-) -> SessionResult:
+) -> FlightResult:
     """Fly one mission on a live autopilot. Unreadable inputs (mission, catalog, URL,
     key) and catalog behaviors without an implementation raise `AeroexecError`s before
     the link opens; no heartbeat raises `MavlinkError` before any recording file is
-    created. `announce` is told each stand-in once, before the link opens."""
+    created. `announce` is told each stand-in once, before the link opens. A signal
+    (`Interrupted`) is re-raised after the ending, with what was done in its notes."""
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
     code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
     vehicle_config = config.vehicle_config()
-    parse_endpoint(config.connect, allow_remote=config.allow_remote)
-    clock = WallClock()
+    parse_endpoint(config.connect, allow_remote=config.allow_remote, baud=config.baud)
     vehicle = MavlinkVehicle(vehicle_config)
     recorder = None
+    stopped: BaseException | None = None
     try:
         if on_listening is not None:
             on_listening(vehicle)
-        vehicle.connect()
+        try:
+            vehicle.connect()
+        except Interrupted as exc:
+            exc.notes.append("stopped before the autopilot was ready; nothing was commanded")
+            raise
         if on_connected is not None:
             on_connected(vehicle)
+        clock = WallClock()  # time 0: the link is up (not when we began to wait for it)
         metadata = {
             "aeroexec_version": __version__,
             "clock": clock.kind,
@@ -125,7 +179,9 @@ def fly(
             "autopilot_system": str(vehicle.target[0] if vehicle.target else ""),
             "signing": "yes" if vehicle_config.signing_key is not None else "no",
             "failsafe": config.failsafe,
+            "on_exit": config.on_exit,
             "heartbeat_timeout_s": f"{config.heartbeat_timeout:g}",
+            "link_timeout_s": f"{config.link_timeout:g}",
             **stand_in_metadata(code),
         }
         activity, all_observers, recorder = session_observers(
@@ -149,29 +205,59 @@ def fly(
             drone=config.drone,
         )
         vehicle.tap = executive.bus.publish  # hands over the traffic of the connection too
+        executive.publish_vehicle_state()  # what the mission starts from (replay needs it)
+        api = MissionAPI(executive)
+        outcome = MissionOutcome(False, None, "the mission did not end")
         try:
-            outcome = run_script(script, MissionAPI(executive))
-        except KeyboardInterrupt:
-            # Stopped by the operator: leave the aircraft braking and holding, not
-            # flying on toward its last setpoint.
-            try:
-                if vehicle.state().flying:
-                    vehicle.hover()
-            except VehicleCommandError:
-                pass
-            raise
-        finally:
+            outcome = run_script(script, api)
+            how = "returned" if outcome.returned else "raised"
+        except LinkTimeout as exc:
+            outcome = MissionOutcome(
+                False, None, f"stopped: the link was lost for {exc.silent_s:.1f} s"
+            )
+            how = "link_timeout"
+        except BaseException as exc:
+            # A signal, Ctrl-C, an unusable script, our own bug: whatever it is, the
+            # vehicle gets its ending before the exception goes on.
+            stopped = exc
+            how = exc.name if isinstance(exc, Interrupted) else type(exc).__name__
+        # When and how the mission ended: replay stops a mission stopped here at the
+        # same tick, and tells the ending's commands from the mission's.
+        executive.bus.publish(
+            "mavlink/link", {"event": "mission_end", "url": vehicle.endpoint.url, "how": how}
+        )
+        ending = end_flight(
+            executive, api, vehicle, config.on_exit, link_timeout=config.link_timeout
+        )
+        with contextlib.suppress(LinkTimeout):
             vehicle.step(0.0)  # what arrived since the last tick is recorded too
-            executive.bus.publish("mavlink/stats", lambda: _stats(vehicle))
+        executive.bus.publish(
+            "mavlink/link",
+            {
+                "event": "ending",
+                "url": vehicle.endpoint.url,
+                "down": ending.down,
+                "last_seen": ending.last_seen,
+                "actions": list(ending.actions),
+                "problem": ending.problem,
+            },
+        )
+        executive.bus.publish("mavlink/stats", lambda: _stats(vehicle))
     finally:
         if recorder is not None:
             recorder.close()
         vehicle.close()
+    if stopped is not None:
+        if isinstance(stopped, Interrupted):
+            stopped.notes.append(ending.line())
+            if config.record is not None:
+                stopped.notes.append(f"recording finalized: {config.record}")
+        raise stopped
     losses = vehicle.link_losses
     link_summary = vehicle.stats.summary()
     if losses:
         link_summary += f"; link lost {losses} time{'s' if losses > 1 else ''}"
-    return SessionResult(
+    return FlightResult(
         outcome=outcome,
         activations=tuple(activity.rows),
         duration_s=executive.now_s,
@@ -179,6 +265,8 @@ def fly(
         recording=str(config.record) if config.record is not None else None,
         # The recorded metadata plus, after the fact, what went over the link.
         metadata={**metadata, "link_summary": link_summary},
+        ending=ending,
+        link_losses=losses,
     )
 
 

@@ -85,7 +85,7 @@ UNTRUSTED = (
 )
 
 
-def _script_to_run(
+def script_to_run(
     run: RecordedRun, mission: MissionScript | None, trust_recording: bool, notes: list[str]
 ) -> MissionScript | None:
     """The mission script closed loop runs, or None to replay the command stream.
@@ -132,7 +132,7 @@ def replay_closed(
     drone = metadata.get("drone") or "drone1"
     builder = OutcomeBuilder(horizon_ns)
     observer = OutcomeObserver(builder)
-    script = _script_to_run(run, mission, trust_recording, notes)
+    script = script_to_run(run, mission, trust_recording, notes)
     if script is None:
         _replay_commands(run, catalog, behaviors, output, world, seed, drone, observer)
     else:

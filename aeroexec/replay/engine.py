@@ -31,6 +31,7 @@ from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
+from aeroexec.replay.liveloop import is_live, replay_live
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S
 from aeroexec.replay.workers import completed_or_interrupted
@@ -153,8 +154,20 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     mode = choose_mode(run, options.mode)
     catalog = choose_catalog(run, options.catalog)
     behaviors = choose_behaviors(run, catalog, options.behaviors)
-    if mode is Mode.closed:
-        mission = load_mission(options.mission) if options.mission is not None else None
+    mission = load_mission(options.mission) if options.mission is not None else None
+    if mode is Mode.closed and is_live(run):
+        # A live flight cannot be flown again: its recorded vehicle stands in for it.
+        replayed, how = replay_live(
+            path,
+            run,
+            catalog,
+            behaviors,
+            options.output,
+            horizon,
+            mission=mission,
+            trust_recording=options.trust_recording,
+        )
+    elif mode is Mode.closed:
         replayed, how = replay_closed(
             run,
             catalog,

@@ -44,7 +44,7 @@ def replay_open(
     states = RecordingSource(path).scan(lambda name: name == STATE_TOPIC)
     clock = SimClock()
     vehicle = ReplayVehicle(states, clock, offset)
-    script = Script()
+    script = Script(offset)
     builder = OutcomeBuilder(horizon_ns)
     metadata = {
         "aeroexec_version": __version__,

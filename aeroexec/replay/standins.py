@@ -8,11 +8,17 @@ the recorded command; the stand-in then
   (the activation was refused before the check), it asks the real behavior class being
   replayed (the standard library's or a developer's), against the beliefs fed from the
   recorded vehicle state;
-* ends with the recorded code at the recorded time after its start, for activations that
-  ended by themselves (GOAL_ACHIEVED, WRONG_PROGRESS, ASSUMPTION_CONFLICT,
-  PROCESS_FAILURE). Activations that were interrupted, timed out or still running are
-  left running: the replayed commands interrupt them again, and the catalog's (new)
-  timeout ends them, so a shortened timeout shows as TIME_OUT.
+* ends with the recorded code at the recorded instant, for activations that ended by
+  themselves (GOAL_ACHIEVED, WRONG_PROGRESS, ASSUMPTION_CONFLICT, PROCESS_FAILURE): at
+  the first tick at or after the time its end event was recorded (at once, in
+  `on_start`, when that time has already come). The instant, not the duration after the
+  replayed start: replay starts a command at the first tick at or after its recorded
+  time, so a duration counted from there would end the behavior up to a tick late, after
+  the next command, which in a wall-clock recording follows the end event by a fraction
+  of a millisecond and would then interrupt it. Activations that were interrupted,
+  timed out or still running are left running: the replayed commands interrupt them
+  again, and the catalog's (new) timeout ends them, so a shortened timeout shows as
+  TIME_OUT.
 """
 
 from __future__ import annotations
@@ -44,9 +50,14 @@ class RecordedEnd:
     code: EventCode
     duration_ns: int
     detail: str = ""
+    #: When it ended, in seconds of the replay's clock (the recorded time less the
+    #: replay's offset); None: unknown, the duration after the start counts.
+    at_s: float | None = None
 
 
-def recorded_end(command: CommandOutcome) -> RecordedEnd | None:
+def recorded_end(command: CommandOutcome, offset_ns: int | None = None) -> RecordedEnd | None:
+    """How `command`'s activation ended by itself, if it did; with `offset_ns` (the
+    recorded time of the replay clock's zero), also the instant it ended."""
     if not command.accepted or command.end_code is None or command.duration_ns is None:
         return None
     try:
@@ -55,18 +66,24 @@ def recorded_end(command: CommandOutcome) -> RecordedEnd | None:
         return None
     if code not in SELF_ENDED:
         return None
-    return RecordedEnd(code, command.duration_ns, command.end_detail)
+    at_s = None
+    if offset_ns is not None and command.end_ns is not None:
+        at_s = (command.end_ns - offset_ns) / NS_PER_S
+    return RecordedEnd(code, command.duration_ns, command.end_detail, at_s)
 
 
 class Script:
-    """What the next activation of each behavior should do (set by the player)."""
+    """What the next activation of each behavior should do (set by the player).
+    `offset_ns`: the recorded time of the replay clock's zero (None: ends count from the
+    replayed start)."""
 
-    def __init__(self) -> None:
+    def __init__(self, offset_ns: int | None = None) -> None:
+        self.offset_ns = offset_ns
         self._ends: dict[str, RecordedEnd | None] = {}
         self._situations: dict[str, tuple[bool, str] | None] = {}
 
     def arm(self, command: CommandOutcome) -> None:
-        self._ends[command.behavior] = recorded_end(command)
+        self._ends[command.behavior] = recorded_end(command, self.offset_ns)
         self._situations[command.behavior] = command.situation
 
     def end_for(self, behavior: str) -> RecordedEnd | None:
@@ -94,14 +111,19 @@ class StandIn(Behavior):
 
     def on_start(self, args: Mapping[str, Any]) -> None:
         self._end = self.script.end_for(self.behavior_name)
-        if self._end is not None and self._end.duration_ns <= 0:
+        if self._end is not None and self._due(self._end):
             self.finish(self._end.code, self._end.detail)
 
     def on_run(self) -> Finished | None:
         end = self._end
-        if end is not None and self.elapsed >= end.duration_ns / NS_PER_S:
+        if end is not None and self._due(end):
             return Finished(end.code, end.detail)
         return None
+
+    def _due(self, end: RecordedEnd) -> bool:
+        if end.at_s is not None:
+            return self.now >= end.at_s
+        return self.elapsed >= end.duration_ns / NS_PER_S
 
     def on_stop(self) -> None:
         pass

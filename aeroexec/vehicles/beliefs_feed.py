@@ -62,10 +62,15 @@ def update_beliefs(beliefs: Beliefs, state: VehicleState) -> int:
         changes += beliefs.add(_FLYING)
     elif any(fact == _FLYING for fact in beliefs):
         changes += beliefs.remove(_FLYING)
+    # A value that is not a number (a vehicle's bad estimate) leaves its belief as it was:
+    # believing "nan" would be wrong, and rounding it would raise.
     x, y, z = state.position
-    changes += beliefs.add(Compound("position", ("self", (_cm(x), _cm(y), _cm(z)))))
-    percent = battery_percent(state.battery)
-    changes += beliefs.add(_LEVELS[percent < LOW_BATTERY_PERCENT])
-    changes += beliefs.add(Compound("battery_charge", ("self", percent)))
-    changes += beliefs.add(Compound("yaw", ("self", heading_degrees(state.yaw))))
+    if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
+        changes += beliefs.add(Compound("position", ("self", (_cm(x), _cm(y), _cm(z)))))
+    if math.isfinite(state.battery):
+        percent = battery_percent(state.battery)
+        changes += beliefs.add(_LEVELS[percent < LOW_BATTERY_PERCENT])
+        changes += beliefs.add(Compound("battery_charge", ("self", percent)))
+    if math.isfinite(state.yaw):
+        changes += beliefs.add(Compound("yaw", ("self", heading_degrees(state.yaw))))
     return changes

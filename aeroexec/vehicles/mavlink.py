@@ -5,11 +5,12 @@ The implementation lives in the `aeroexec.mavlink` package (link, codec, frames,
 """
 
 from aeroexec.mavlink.endpoint import DEFAULT_GCS_URL, MavlinkError, parse_endpoint
-from aeroexec.mavlink.vehicle import FAILSAFES, MavlinkConfig, MavlinkVehicle
+from aeroexec.mavlink.vehicle import FAILSAFES, LinkTimeout, MavlinkConfig, MavlinkVehicle
 
 __all__ = [
     "DEFAULT_GCS_URL",
     "FAILSAFES",
+    "LinkTimeout",
     "MavlinkConfig",
     "MavlinkError",
     "MavlinkVehicle",

@@ -1,0 +1,184 @@
+"""How a live flight ends: never by just closing the link under a flying vehicle.
+
+Whatever ended the mission (it returned, it raised, a signal, a link lost too long),
+`end_flight` runs the same policy, with the executive still stepping so every packet and
+state keeps being recorded:
+
+1. the behaviors still active are inhibited (through the mission API, so the recording
+   shows the commands and a replay repeats them);
+2. a lost link is waited for until `link_timeout` seconds after it went silent; when it
+   comes back, the vehicle's failsafe (`--failsafe`) runs first;
+3. `on_exit` is applied to a vehicle that is airborne (or armed): `land` switches to
+   LAND (unless the autopilot is already landing or returning) and waits, bounded, for
+   landed and disarmed, disarming a vehicle left armed on the ground; `hold` brakes and
+   holds in GUIDED and leaves it to the autopilot's own GCS failsafe; `none` leaves the
+   vehicle as it is. A vehicle flying in a mode aeroexec did not command (a pilot took
+   over with the sticks, or was flying it when aeroexec connected) is left to whoever
+   has it: aeroexec never takes a vehicle away from a pilot.
+
+A signal during the waits (a second Ctrl-C) stops waiting: the vehicle keeps doing what
+it was told. The result says whether the vehicle ended landed and disarmed, and the one
+line describing its last seen state.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+from aeroexec.executive.executive import Executive
+from aeroexec.interrupts import Interrupted
+from aeroexec.mavlink.vehicle import LinkTimeout, MavlinkVehicle
+from aeroexec.mission.api import MissionAPI
+from aeroexec.vehicles.base import VehicleCommandError
+
+OnExit = Literal["land", "hold", "none"]
+ON_EXIT: tuple[OnExit, ...] = ("land", "hold", "none")
+#: Wall seconds a landing may take beyond its descent at `LANDING_RATE` (touchdown,
+#: the autopilot's land detector and disarm take a few seconds).
+LANDING_MARGIN_S = 20.0
+#: The slowest descent rate (m/s) a landing is expected to keep (ArduCopter: LAND_SPEED
+#: 0.5 m/s near the ground).
+LANDING_RATE = 0.25
+#: An RTL first flies home (WPNAV_SPEED, 5 m/s by default): at least this speed (m/s).
+RETURN_RATE = 1.0
+
+
+@dataclass(frozen=True, slots=True)
+class Ending:
+    #: The vehicle was last seen landed and disarmed.
+    down: bool
+    #: "landed and disarmed at (0.01, 0.00, 0.00) m in LAND" / "flying at ... 31.0 s ago".
+    last_seen: str
+    #: What `end_flight` did, in order ("inhibited GO_TO_POINT", "switched to LAND", ...).
+    actions: tuple[str, ...]
+    #: Why the vehicle may not be down: "" when it is.
+    problem: str = ""
+
+    def line(self) -> str:
+        """One line for the operator."""
+        if self.down:
+            return f"vehicle {self.last_seen}"
+        return f"vehicle not landed: {self.problem}; last seen {self.last_seen}"
+
+
+def end_flight(
+    executive: Executive,
+    api: MissionAPI,
+    vehicle: MavlinkVehicle,
+    on_exit: OnExit,
+    *,
+    link_timeout: float,
+) -> Ending:
+    """Bring the flight to its documented end (see the module docstring)."""
+    actions: list[str] = []
+    stepper = _Stepper(executive)
+    try:
+        _inhibit_all(executive, api, actions)
+        if vehicle.link_lost and not _wait_for_link(stepper, vehicle, link_timeout):
+            return _ending(vehicle, actions, f"link lost, no heartbeat for {link_timeout:g} s")
+        if not vehicle.connected:
+            return _ending(vehicle, actions, "no autopilot connected")
+        if on_exit == "land":
+            return _land(stepper, vehicle, actions, link_timeout)
+        if on_exit == "hold" and vehicle.telemetry.flying:
+            actions.append(_tell(vehicle.hold_here))
+            return _ending(vehicle, actions, "--on-exit hold left it flying")
+        if on_exit == "none" and not vehicle.down:
+            return _ending(vehicle, actions, "--on-exit none left it as it was")
+        return _ending(vehicle, actions, "")
+    except Interrupted as exc:
+        actions.append(f"stopped waiting ({exc.name})")
+        return _ending(vehicle, actions, f"stopped waiting ({exc.name})")
+
+
+class _Stepper:
+    """Steps the executive (recording everything) and tells how long that took."""
+
+    def __init__(self, executive: Executive) -> None:
+        self.executive = executive
+
+    @property
+    def now(self) -> float:
+        return self.executive.now_s
+
+    def step(self) -> None:
+        with contextlib.suppress(LinkTimeout):  # the ending watches the link itself
+            self.executive.step()
+
+
+def _tell(command: object) -> str:
+    try:
+        return str(command())  # type: ignore[operator]
+    except VehicleCommandError as exc:
+        return f"failed: {exc}"
+
+
+def _inhibit_all(executive: Executive, api: MissionAPI, actions: list[str]) -> None:
+    for name in executive.active_behaviors:
+        api.inhibit_behavior(name)
+        actions.append(f"inhibited {name}")
+
+
+def _wait_for_link(stepper: _Stepper, vehicle: MavlinkVehicle, link_timeout: float) -> bool:
+    """Step until the link is back (True) or it was silent `link_timeout` s (False)."""
+    while vehicle.link_lost:
+        if vehicle.silent_for() > link_timeout:
+            return False
+        stepper.step()
+    return True
+
+
+def _land(
+    stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str], link_timeout: float
+) -> Ending:
+    commanded = False
+    deadline = bound = math.inf
+    while not vehicle.down:
+        if vehicle.link_lost:
+            if not _wait_for_link(stepper, vehicle, link_timeout):
+                return _ending(
+                    vehicle,
+                    actions,
+                    f"link lost while landing, no heartbeat for {link_timeout:g} s",
+                )
+            continue
+        if vehicle.telemetry.flying and not commanded:
+            commanded = True
+            if not (vehicle.descending or vehicle.in_commanded_mode):
+                mode = vehicle.telemetry.mode
+                return _ending(
+                    vehicle,
+                    actions,
+                    f"{mode} was not commanded by aeroexec: a pilot or the autopilot has it",
+                )
+            actions.append(_tell(vehicle.bring_down))
+            bound = _landing_bound(vehicle)
+            deadline = stepper.now + bound
+        elif not vehicle.telemetry.flying and vehicle.telemetry.armed and not commanded:
+            # Armed on the ground (a take-off that failed after arming): disarm it.
+            commanded = True
+            actions.append(_tell(lambda: (vehicle.disarm(), "disarmed")[1]))
+            bound = LANDING_MARGIN_S
+            deadline = stepper.now + bound
+        if stepper.now > deadline:
+            return _ending(vehicle, actions, f"still not down {bound:.0f} s after the command")
+        stepper.step()
+    return _ending(vehicle, actions, "")
+
+
+def _landing_bound(vehicle: MavlinkVehicle) -> float:
+    x, y, z = vehicle.state().position
+    return LANDING_MARGIN_S + max(z, 0.0) / LANDING_RATE + math.hypot(x, y) / RETURN_RATE
+
+
+def _ending(vehicle: MavlinkVehicle, actions: list[str], problem: str) -> Ending:
+    down = vehicle.down and not vehicle.link_lost and vehicle.target is not None
+    return Ending(
+        down=down,
+        last_seen=vehicle.last_seen(),
+        actions=tuple(actions),
+        problem="" if down else (problem or "it was never seen landed and disarmed"),
+    )

@@ -1,0 +1,332 @@
+"""How `fly` ends, against `MavSim` (fast): --on-exit land|hold|none after a mission that
+returns or raises in the air, behaviors still active, a link that never comes back
+(--link-timeout), the rtl failsafe, and signals (SIGTERM mid-flight, SIGINT while
+waiting for the autopilot). The same endings are flown on ArduCopter SITL in
+test_sitl_flights.py."""
+
+from __future__ import annotations
+
+import math
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from typer.testing import CliRunner
+
+from aeroexec.cli import app
+from aeroexec.executive.bus import MemoryObserver, TopicRecord
+from aeroexec.executive.clock import WallClock
+from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
+from aeroexec.mission.live import FlightConfig, fly
+from aeroexec.recording import open_recording
+from aeroexec.recording.reader import RecordedTopic
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@contextmanager
+def mavsim(port: int, **overrides: Any) -> Iterator[MavSim]:
+    settings: dict[str, Any] = {"speed_factor": 5.0, "heartbeat_hz": 4.0, "ekf_delay": 0.5}
+    settings.update(overrides)
+    sim = MavSim(MavSimConfig(url=f"udpout:127.0.0.1:{port}", **settings))
+    stop = threading.Event()
+    thread = threading.Thread(target=sim.run, args=(stop.is_set,), daemon=True)
+    thread.start()
+    try:
+        yield sim
+    finally:
+        stop.set()
+        thread.join(5)
+        sim.close()
+
+
+def write_mission(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "mission.py"
+    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
+    return path
+
+
+AIRBORNE = (
+    "    api.executeBehavior('TAKE_OFF')\n"
+    "    return api.executeBehavior('GO_TO_POINT', relative_coordinates=[1, 0, 0])\n"
+)
+
+
+def config(mission: Path, port: int, **overrides: Any) -> FlightConfig:
+    return FlightConfig(mission=mission, connect=f"udpin:127.0.0.1:{port}", **overrides)
+
+
+# -- --on-exit ----------------------------------------------------------------------------------
+
+
+def test_a_mission_that_returns_in_the_air_is_landed(tmp_path: Path) -> None:
+    port = free_udp_port()
+    with mavsim(port) as sim:
+        result = fly(config(write_mission(tmp_path, AIRBORNE), port))
+        final = sim.stats()["final"]
+    assert result.outcome.value == "GOAL_ACHIEVED"
+    assert result.ending is not None and result.ending.actions == ("switched to LAND",)
+    assert result.safe and result.ending.down
+    assert final["mode"] == "LAND" and not final["armed"] and not final["flying"]
+    assert abs(final["position"][0] - 1.0) < 0.06  # landed where the mission left it
+
+
+def test_on_exit_hold_leaves_it_holding_and_exits_1(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(tmp_path, AIRBORNE)
+    with mavsim(port) as sim:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--on-exit", "hold"]
+        )
+        time.sleep(0.3)
+        final = sim.stats()["final"]
+    assert result.exit_code == 1
+    assert "ending: braked to hold in GUIDED" in result.output
+    last = result.output.strip().splitlines()[-1]
+    assert last.startswith(
+        "aeroexec: vehicle not landed: --on-exit hold left it flying; last seen flying at (1.0"
+    )
+    assert last.endswith(" m in GUIDED, armed")
+    assert final["mode"] == "GUIDED" and final["flying"] and final["armed"]
+
+
+def test_on_exit_none_commands_nothing(tmp_path: Path) -> None:
+    port = free_udp_port()
+    traffic = MemoryObserver()
+    with mavsim(port) as sim:
+        result = fly(
+            config(write_mission(tmp_path, AIRBORNE), port, on_exit="none"), observers=[traffic]
+        )
+        final = sim.stats()["final"]
+    assert result.ending is not None and result.ending.actions == () and not result.safe
+    assert result.ending.problem == "--on-exit none left it as it was"
+    sent_after_mission = _after(traffic, "mission_end", "mavlink/tx")
+    assert {r["type"] for r in sent_after_mission} <= {"HEARTBEAT"}  # no command, no setpoint
+    assert final["flying"] and final["mode"] == "GUIDED"
+
+
+def _after(traffic: MemoryObserver, event: str, topic: str) -> list[dict[str, Any]]:
+    """Records of `topic` after the `mavlink/link` `event`, in bus order."""
+    records, seen = [], False
+    for record in traffic.records:
+        if not isinstance(record, TopicRecord):
+            continue
+        if record.topic == "mavlink/link" and record.data["event"] == event:
+            seen = True
+        elif seen and record.topic == topic:
+            records.append(record.data)
+    return records
+
+
+def test_a_mission_that_raises_in_the_air_is_landed_and_fails(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path, "    api.executeBehavior('TAKE_OFF')\n    raise RuntimeError('lost my way')\n"
+    )
+    with mavsim(port) as sim:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
+        )
+        final = sim.stats()["final"]
+    assert result.exit_code == 1
+    assert "ending: switched to LAND" in result.output
+    assert "ending: vehicle on the ground at (" in result.output
+    assert result.output.strip().splitlines()[-1] == "mission failed: RuntimeError: lost my way"
+    assert final["mode"] == "LAND" and not final["armed"]
+
+
+def test_behaviors_still_active_are_inhibited_before_landing(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    return api.activateBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n",
+    )
+    with mavsim(port) as sim:
+        result = fly(config(mission, port))
+        final = sim.stats()["final"]
+    assert result.ending is not None
+    assert result.ending.actions == ("inhibited GO_TO_POINT", "switched to LAND")
+    go_to = next(a for a in result.activations if a.behavior == "GO_TO_POINT")
+    assert go_to.end_code == "INTERRUPTED"
+    assert result.safe and final["position"][1] < 5.0  # it never flew the 30 m
+
+
+def test_a_vehicle_a_pilot_took_over_is_left_to_the_pilot(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n    return api.executeBehavior('WAIT', duration=2)\n",
+    )
+    with mavsim(port) as sim:
+
+        def pilot() -> None:
+            while not sim.flying:
+                time.sleep(0.05)
+            time.sleep(0.5)
+            sim._enter_mode(5)  # the pilot flips the mode switch to LOITER
+
+        thread = threading.Thread(target=pilot, daemon=True)
+        thread.start()
+        result = fly(config(mission, port))
+        thread.join(5)
+        final = sim.stats()["final"]
+    assert result.ending is not None and result.ending.actions == ()
+    assert result.ending.problem == (
+        "LOITER was not commanded by aeroexec: a pilot or the autopilot has it"
+    )
+    assert final["mode"] == "LOITER" and final["flying"]  # no LAND forced on the pilot
+
+
+# -- a link that does not come back ---------------------------------------------------------------
+
+
+def test_a_link_lost_longer_than_link_timeout_stops_the_mission(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    return api.executeBehavior('WAIT', duration=60)\n",
+    )
+    traffic = MemoryObserver()
+    with mavsim(port, drop_heartbeats_at=0.5, drop_for=60):
+        started = time.monotonic()
+        result = fly(
+            config(mission, port, heartbeat_timeout=0.5, link_timeout=1.0), observers=[traffic]
+        )
+        took = time.monotonic() - started
+    # WAIT does not fail on a lost link, so the mission would have waited a minute:
+    # the link timeout stopped it.
+    assert took < 10.0
+    assert not result.outcome.returned
+    assert result.outcome.error.startswith("stopped: the link was lost for 1.")
+    assert result.ending is not None and not result.ending.down
+    assert result.problem().startswith(
+        "vehicle not landed: link lost, no heartbeat for 1 s; last seen flying at ("
+    )
+    events = [e["event"] for e in traffic.topics("mavlink/link")]
+    assert events == ["connected", "lost", "mission_end", "ending"]
+    assert traffic.topics("mavlink/link")[2]["how"] == "link_timeout"
+
+
+def test_the_rtl_failsafe_flies_home_and_lands(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    return api.executeBehavior('GO_TO_POINT', coordinates=[0, 12, 1])\n",
+    )
+    with mavsim(port, drop_heartbeats_at=1.0, drop_for=1.5, rtl_altitude=3.0) as sim:
+        result = fly(config(mission, port, heartbeat_timeout=0.5, failsafe="rtl"))
+        final = sim.stats()["final"]
+    assert result.outcome.value == "PROCESS_FAILURE"  # GO_TO_POINT: vehicle fault: link_lost
+    assert result.ending is not None and result.ending.down
+    assert result.ending.actions == ("left it in RTL",)
+    assert result.link_losses == 1 and not result.safe
+    assert final["mode"] == "RTL" and not final["armed"]
+    assert math.hypot(final["position"][0], final["position"][1]) < 0.05  # home
+
+
+# -- signals ------------------------------------------------------------------------------------
+
+
+def test_sigterm_mid_flight_lands_finalizes_the_recording_and_exits_143(tmp_path: Path) -> None:
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    return api.executeBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n",
+    )
+    args = ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--record", str(record)]
+    with mavsim(port) as sim:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "aeroexec", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        try:
+            assert proc.stdout is not None
+            for line in proc.stdout:
+                if "start    GO_TO_POINT" in line:
+                    break
+            time.sleep(0.5)
+            proc.send_signal(signal.SIGTERM)
+            _, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(5)
+        final = sim.stats()["final"]
+    assert proc.returncode == 143
+    (line,) = err.strip().splitlines()
+    assert line.startswith("aeroexec: interrupted by SIGTERM; vehicle on the ground at (")
+    assert line.endswith(f"in LAND, disarmed; recording finalized: {record}")
+    assert final["mode"] == "LAND" and not final["armed"] and 0.5 < final["position"][1] < 29
+    recording = open_recording(record)
+    assert recording.complete
+    events = [
+        item.data
+        for item in recording.records()
+        if isinstance(item, RecordedTopic) and item.name == "mavlink/link"
+    ]
+    assert [e["event"] for e in events] == ["connected", "mission_end", "ending"]
+    assert events[1]["how"] == "SIGTERM"
+    assert events[2]["actions"] == ["inhibited GO_TO_POINT", "switched to LAND"]
+
+
+def test_sigint_while_waiting_for_the_autopilot_exits_130_having_commanded_nothing(
+    tmp_path: Path,
+) -> None:
+    port = free_udp_port()
+    mission = write_mission(tmp_path, AIRBORNE)
+    proc = subprocess.Popen(
+        [
+            *(sys.executable, "-m", "aeroexec", "fly", str(mission)),
+            *("--connect", f"udpin:127.0.0.1:{port}", "--connect-timeout", "60"),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        assert "waiting for a heartbeat" in proc.stdout.readline()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(5)
+    assert proc.returncode == 130
+    assert err.strip() == (
+        "aeroexec: interrupted by SIGINT; stopped before the autopilot was ready; "
+        "nothing was commanded"
+    )
+
+
+# -- time -----------------------------------------------------------------------------------------
+
+
+def test_a_late_tick_is_not_made_up_for_with_a_burst() -> None:
+    tick = 10_000_000  # 10 ms
+    clock = WallClock(tick_ns=tick)
+    clock.advance()
+    time.sleep(0.055)  # a command waited for its ack: five ticks were missed
+    late = clock.advance()
+    following = clock.advance()
+    # The tick after the late one waits for the next slot of the grid instead of
+    # running at once to catch up.
+    assert following // tick > late // tick

@@ -1,0 +1,516 @@
+"""Live flights on the real autopilot: ArduCopter 4.5.6 SITL, one per test.
+
+Each test starts its own SITL (its own `-I` instance, so its ports move by 10, and
+`SITL_SPEEDUP`, 8 by default) and `aeroexec fly` as a subprocess, over a different
+connection kind each: UDP, TCP (fly connects), TCP (SITL connects), a serial line (two
+pseudo-terminals and a relay). Both processes are killed at teardown, pass or fail.
+A second MAVLink connection to SITL's SERIAL1 (TCP 5762 + 10 x instance, system id 250,
+never a heartbeat, so ArduPilot's GCS failsafe does not count it) is the test's own
+view of the vehicle: what the autopilot itself says about mode, arming and landing.
+
+The binary is found at `../shared/sitl/arducopter` (beside the repository) or at
+`$AEROEXEC_SITL`, with `copter.parm` beside it; without it these tests are skipped.
+Timeouts are wall-clock seconds with a wide margin: the machine may be busy.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+import queue
+import select
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import tty
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from aeroexec.mission.paths import APPENDIX_C
+from aeroexec.recording import open_recording
+from aeroexec.recording.reader import RecordedTopic
+from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
+
+REPO = Path(__file__).resolve().parents[1]
+BINARY = Path(os.environ.get("AEROEXEC_SITL") or REPO.parent / "shared" / "sitl" / "arducopter")
+PARM = BINARY.parent / "copter.parm"
+SPEEDUP = float(os.environ.get("SITL_SPEEDUP", "8"))
+#: SITL instances 30, 31, ...: ports 6060+, away from a SITL someone runs by hand (0..9).
+INSTANCES = itertools.count(30)
+
+pytestmark = pytest.mark.skipif(
+    not (BINARY.is_file() and os.access(BINARY, os.X_OK) and PARM.is_file()),
+    reason=f"ArduCopter SITL not found at {BINARY} (with copter.parm beside it); "
+    "set AEROEXEC_SITL to the arducopter binary",
+)
+
+LAND_MODE, GUIDED_MODE = 9, 4
+ON_GROUND = 1  # MAV_LANDED_STATE_ON_GROUND
+#: A leg long enough (60 m at 3 m/s, ~2.5 s of wall time at 8x) to act in its middle.
+FAR_LEG = "[0, 60, 2]"
+SLOW = {"WPNAV_SPEED": 300.0}  # cm/s: GUIDED's horizontal speed
+
+
+# -- the harness -------------------------------------------------------------------------------
+
+
+class Sitl:
+    """One ArduCopter SITL process (`start-sitl`'s arguments, minus the shell)."""
+
+    def __init__(
+        self,
+        workdir: Path,
+        *,
+        serial0: str | None = None,
+        params: dict[str, float] | None = None,
+    ) -> None:
+        self.instance = next(INSTANCES)
+        self.workdir = workdir / f"sitl{self.instance}"
+        self.workdir.mkdir()
+        defaults = str(PARM)
+        if params:
+            extra = self.workdir / "test.parm"
+            extra.write_text("".join(f"{name} {value:g}\n" for name, value in params.items()))
+            defaults += f",{extra}"
+        args = [str(BINARY), "--model", "quad", "--speedup", f"{SPEEDUP:g}"]
+        args += ["--defaults", defaults, "-I", str(self.instance)]
+        if serial0 is not None:
+            args += ["--serial0", serial0]
+        self.log = (self.workdir / "sitl.log").open("wb")
+        self.proc = subprocess.Popen(
+            args, cwd=self.workdir, stdout=self.log, stderr=subprocess.STDOUT
+        )
+
+    @property
+    def tcp_port(self) -> int:
+        """SERIAL0's TCP server (when started without `serial0`)."""
+        return 5760 + 10 * self.instance
+
+    @property
+    def monitor_port(self) -> int:
+        return 5762 + 10 * self.instance
+
+    def signal(self, signum: int) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signum)
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGCONT)  # a stopped process cannot act on TERM
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(5)
+        self.log.close()
+
+
+class Monitor:
+    """The test's own MAVLink view of SITL, on SERIAL1."""
+
+    def __init__(self, sitl: Sitl) -> None:
+        from pymavlink import mavutil
+
+        self.conn = mavutil.mavlink_connection(
+            f"tcp:127.0.0.1:{sitl.monitor_port}", source_system=250, source_component=0, retries=30
+        )
+        self.armed: bool | None = None
+        self.mode: int | None = None
+        self.landed: int | None = None
+        self.position: tuple[float, float, float] | None = None
+        for message_id in (245, 32):  # EXTENDED_SYS_STATE, LOCAL_POSITION_NED at 4 Hz
+            self.conn.mav.command_long_send(1, 1, 511, 0, message_id, 250000, 0, 0, 0, 0, 0)
+
+    def wait_for(self, predicate: Callable[[Monitor], bool], timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            msg = self.conn.recv_match(
+                type=["HEARTBEAT", "EXTENDED_SYS_STATE", "LOCAL_POSITION_NED"],
+                blocking=True,
+                timeout=0.5,
+            )
+            if msg is None:
+                continue
+            kind = msg.get_type()
+            if kind == "HEARTBEAT" and msg.get_srcComponent() == 1 and msg.type != 6:
+                self.armed = bool(msg.base_mode & 128)
+                self.mode = int(msg.custom_mode)
+            elif kind == "EXTENDED_SYS_STATE":
+                self.landed = int(msg.landed_state)
+            elif kind == "LOCAL_POSITION_NED":
+                self.position = (float(msg.x), float(msg.y), float(msg.z))
+            if None not in (self.armed, self.landed) and predicate(self):
+                return True
+        return False
+
+    def down(self, timeout: float = 60.0) -> bool:
+        """Wait until the autopilot says landed and disarmed."""
+        return self.wait_for(lambda m: m.landed == ON_GROUND and m.armed is False, timeout)
+
+    def close(self) -> None:
+        self.conn.close()
+
+
+class Fly:
+    """`aeroexec fly` in a subprocess; stdout lines are collected by a thread."""
+
+    def __init__(self, args: list[str]) -> None:
+        self.popen = subprocess.Popen(
+            [sys.executable, "-m", "aeroexec", "fly", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        self.lines: queue.Queue[str] = queue.Queue()
+        self.out: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.popen.stdout is not None
+        for line in self.popen.stdout:
+            self.out.append(line)
+            self.lines.put(line)
+
+    def wait_for(self, text: str, timeout: float = 120.0) -> str:
+        deadline = time.monotonic() + timeout
+        while (remaining := deadline - time.monotonic()) > 0:
+            try:
+                line = self.lines.get(timeout=remaining)
+            except queue.Empty:
+                break
+            if text in line:
+                return line
+        raise AssertionError(f"no line with {text!r}; fly printed:\n{''.join(self.out)}")
+
+    def finish(self, timeout: float = 180.0) -> tuple[int, str, str]:
+        assert self.popen.stderr is not None
+        code = self.popen.wait(timeout)
+        err = self.popen.stderr.read()
+        self._reader.join(5)
+        return code, "".join(self.out), err
+
+    def kill(self) -> None:
+        if self.popen.poll() is None:
+            self.popen.kill()
+            self.popen.wait(5)
+        for stream in (self.popen.stdout, self.popen.stderr):
+            if stream is not None:
+                stream.close()
+
+
+@pytest.fixture
+def flight(tmp_path: Path) -> Iterator[Callable[..., Any]]:
+    """Starts SITLs, monitors and fly processes; kills them all at teardown."""
+    started: list[Any] = []
+
+    def start(kind: type, *args: Any, **kwargs: Any) -> Any:
+        thing = kind(*args, **kwargs)
+        started.append(thing)
+        return thing
+
+    yield start
+    for thing in reversed(started):
+        if isinstance(thing, Fly):
+            thing.kill()
+        elif isinstance(thing, Sitl):
+            thing.stop()
+        else:
+            thing.close()
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def free_tcp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def write_mission(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "mission.py"
+    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
+    return path
+
+
+def fly_args(mission: Path, url: str, record: Path, *extra: str) -> list[str]:
+    return [
+        str(mission),
+        "--connect",
+        url,
+        "--record",
+        str(record),
+        "--connect-timeout",
+        "120",
+        *extra,
+    ]
+
+
+def recorded(record: Path) -> tuple[bool, dict[str, list[Any]]]:
+    recording = open_recording(record)
+    topics: dict[str, list[Any]] = {}
+    for item in recording.records():
+        if isinstance(item, RecordedTopic):
+            topics.setdefault(item.name, []).append(item.data)
+    return recording.complete, topics
+
+
+def link_events(topics: dict[str, list[Any]]) -> list[str]:
+    return [e["event"] for e in topics.get("mavlink/link", []) if e["event"] != "connection"]
+
+
+def assert_replays_unchanged(record: Path) -> None:
+    for mode in (Mode.open, Mode.closed):
+        replayed = replay_recording(record, ReplayOptions(mode=mode))
+        assert replayed.diff is not None and replayed.diff.compared > 0
+        assert replayed.equal, (mode, [d.message for d in replayed.diff.differences])
+
+
+@contextmanager
+def null_modem() -> Iterator[tuple[str, str]]:
+    """Two pseudo-terminals joined by a relay thread: a serial cable."""
+    masters, slaves = [], []
+    for _ in range(2):
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        masters.append(master)
+        slaves.append(slave)
+    stop = threading.Event()
+
+    def relay() -> None:
+        while not stop.is_set():
+            ready, _, _ = select.select(masters, [], [], 0.05)
+            for fd in ready:
+                try:
+                    os.write(masters[1 - masters.index(fd)], os.read(fd, 4096))
+                except OSError:
+                    continue
+
+    thread = threading.Thread(target=relay, daemon=True)
+    thread.start()
+    try:
+        yield os.ttyname(slaves[0]), os.ttyname(slaves[1])
+    finally:
+        stop.set()
+        thread.join(5)
+        for fd in masters + slaves:
+            os.close(fd)
+
+
+# -- whole missions ----------------------------------------------------------------------------
+
+
+def test_appendix_c_over_udp_lands_and_replays_unchanged(tmp_path: Path, flight: Any) -> None:
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    fly = flight(Fly, fly_args(APPENDIX_C, f"udpin:127.0.0.1:{port}", record))
+    sitl = flight(Sitl, tmp_path, serial0=f"udpclient:127.0.0.1:{port}")
+    code, out, err = fly.finish()
+
+    assert code == 0, err
+    assert "7 activations: 6 GOAL_ACHIEVED, 0 rejected" in out
+    assert "ending: vehicle on the ground at (" in out and "in LAND, disarmed" in out
+    monitor = flight(Monitor, sitl)
+    assert monitor.down(timeout=30) and monitor.mode == LAND_MODE
+    complete, topics = recorded(record)
+    assert complete
+    assert link_events(topics) == ["connected", "mission_end", "ending"]
+    assert [e["code"] for e in topics["behavior_event"]].count("GOAL_ACHIEVED") == 6
+    acks = [r["fields"] for r in topics["mavlink/rx"] if r["type"] == "COMMAND_ACK"]
+    assert acks and all(a["result"] == 0 for a in acks)  # every command ACCEPTED
+    assert_replays_unchanged(record)
+
+
+LONGER = (
+    "    results = [api.executeBehavior('TAKE_OFF')]\n"
+    "    results.append(api.executeBehavior('GO_TO_POINT', coordinates=[0, 0, 2]))\n"
+    "    for x, y, angle in [(4, 0, 0), (4, 4, 90), (0, 4, 180), (0, 0, -90)]:\n"
+    "        results.append(api.executeBehavior('GO_TO_POINT', coordinates=[x, y, 2]))\n"
+    "        results.append(api.executeBehavior('ROTATE', angle=angle))\n"
+    "    results.append(api.executeBehavior('START_MOVING', direction='FORWARD', speed=1))\n"
+    "    results.append(api.executeBehavior('GO_TO_POINT', relative_coordinates=[0, 0, -1]))\n"
+    "    results.append(api.executeBehavior('WAIT', duration=1))\n"
+    "    results.append(api.executeBehavior('LAND'))\n"
+    "    return results\n"
+)
+
+
+def test_a_longer_mission_over_tcp(tmp_path: Path, flight: Any) -> None:
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, LONGER)
+    sitl = flight(Sitl, tmp_path)  # SERIAL0: a TCP server waiting for its client
+    fly = flight(Fly, fly_args(mission, f"tcp:127.0.0.1:{sitl.tcp_port}", record))
+    code, out, err = fly.finish()
+
+    assert code == 0, err
+    assert "14 activations: 14 GOAL_ACHIEVED, 0 rejected" in out
+    monitor = flight(Monitor, sitl)
+    assert monitor.down(timeout=30)
+    assert monitor.wait_for(lambda m: m.position is not None, 10)
+    assert monitor.position is not None and abs(monitor.position[0]) < 6.0
+    complete, topics = recorded(record)
+    assert complete and link_events(topics) == ["connected", "mission_end", "ending"]
+    velocity = [r for r in topics["mavlink/tx"] if r["type"] == "SET_POSITION_TARGET_LOCAL_NED"]
+    assert any(r["fields"]["type_mask"] == 0x9C7 for r in velocity)  # START_MOVING's
+    assert_replays_unchanged(record)
+
+
+# -- losing the link ---------------------------------------------------------------------------
+
+
+def test_sitl_stopped_mid_flight_is_a_lost_link_then_the_failsafe_lands(
+    tmp_path: Path, flight: Any
+) -> None:
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(
+        tmp_path,
+        "    return [api.executeBehavior('TAKE_OFF'),\n"
+        f"            api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG})]\n",
+    )
+    args = fly_args(mission, f"udpin:127.0.0.1:{port}", record, "--heartbeat-timeout", "1")
+    fly = flight(Fly, args)
+    sitl = flight(Sitl, tmp_path, serial0=f"udpclient:127.0.0.1:{port}", params=SLOW)
+    fly.wait_for("start    GO_TO_POINT")
+    time.sleep(1.0)
+    sitl.signal(signal.SIGSTOP)  # the autopilot freezes: no heartbeat, no telemetry
+    fly.wait_for("end      GO_TO_POINT", timeout=30)
+    time.sleep(1.0)
+    sitl.signal(signal.SIGCONT)
+    code, out, err = fly.finish()
+
+    assert code == 1
+    assert "GO_TO_POINT PROCESS_FAILURE" in out and "(vehicle fault: link_lost)" in out
+    assert (
+        err.strip()
+        .splitlines()[-1]
+        .startswith(
+            "aeroexec: the link was lost 1 time during the flight; vehicle on the ground at ("
+        )
+    )
+    complete, topics = recorded(record)
+    assert complete
+    assert link_events(topics) == [
+        "connected",
+        "lost",
+        "mission_end",
+        "restored",
+        "failsafe",
+        "ending",
+    ]
+    failsafe = next(e for e in topics["mavlink/link"] if e["event"] == "failsafe")
+    assert failsafe["action"] == "land"
+    monitor = flight(Monitor, sitl)
+    assert monitor.down(timeout=60) and monitor.mode == LAND_MODE
+    assert monitor.wait_for(lambda m: m.position is not None, 10)
+    assert monitor.position is not None and 1.0 < monitor.position[0] < 55.0  # short of 60 m
+    assert_replays_unchanged(record)
+
+
+def test_sitl_killed_mid_flight_ends_fly_with_the_vehicle_last_seen(
+    tmp_path: Path, flight: Any
+) -> None:
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(
+        tmp_path,
+        "    return [api.executeBehavior('TAKE_OFF'),\n"
+        f"            api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG})]\n",
+    )
+    sitl = flight(Sitl, tmp_path, params=SLOW)
+    url = f"tcp:127.0.0.1:{sitl.tcp_port}"
+    fly = flight(Fly, fly_args(mission, url, record, "--link-timeout", "2"))
+    fly.wait_for("start    GO_TO_POINT")
+    time.sleep(1.0)
+    sitl.signal(signal.SIGKILL)
+    code, _, err = fly.finish()
+
+    assert code == 1
+    line = err.strip().splitlines()[-1]
+    assert line.startswith(
+        "aeroexec: vehicle not landed: link lost, no heartbeat for 2 s; last seen flying at ("
+    ), err
+    assert " m in GUIDED, armed, " in line and line.endswith(" s ago")
+    complete, topics = recorded(record)
+    assert complete  # the recording has its footer although the vehicle is gone
+    lost = next(e for e in topics["mavlink/link"] if e["event"] == "lost")
+    # TCP: known at once, from the connection (an EOF or a reset, as the kernel has it),
+    # not after the 3 s heartbeat timeout.
+    assert lost["why"] in ("closed by the peer", "Connection reset by peer")
+    assert lost["silent_s"] < 1.0
+    ending = topics["mavlink/link"][-1]
+    assert ending["event"] == "ending" and not ending["down"]
+
+
+# -- stopping fly ------------------------------------------------------------------------------
+
+
+def test_sigterm_of_fly_mid_flight_lands_finalizes_and_exits_143(
+    tmp_path: Path, flight: Any
+) -> None:
+    port = free_tcp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(
+        tmp_path,
+        "    return [api.executeBehavior('TAKE_OFF'),\n"
+        f"            api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG})]\n",
+    )
+    # fly listens; SITL is the TCP client (as a companion computer's router would be).
+    fly = flight(Fly, fly_args(mission, f"tcpin:127.0.0.1:{port}", record))
+    fly.wait_for("waiting for a heartbeat")
+    sitl = flight(Sitl, tmp_path, serial0=f"tcpclient:127.0.0.1:{port}", params=SLOW)
+    fly.wait_for("start    GO_TO_POINT")
+    time.sleep(1.0)
+    fly.popen.send_signal(signal.SIGTERM)
+    code, _, err = fly.finish()
+
+    assert code == 143
+    (line,) = err.strip().splitlines()
+    assert line.startswith("aeroexec: interrupted by SIGTERM; vehicle on the ground at (")
+    assert line.endswith(f"in LAND, disarmed; recording finalized: {record}")
+    complete, topics = recorded(record)
+    assert complete
+    mission_end = next(e for e in topics["mavlink/link"] if e["event"] == "mission_end")
+    assert mission_end["how"] == "SIGTERM"
+    ending = topics["mavlink/link"][-1]
+    assert ending["down"] and ending["actions"] == ["inhibited GO_TO_POINT", "switched to LAND"]
+    interrupted = [e for e in topics["behavior_event"] if e["code"] == "INTERRUPTED"]
+    assert [e["name"] for e in interrupted] == ["GO_TO_POINT"]
+    monitor = flight(Monitor, sitl)
+    assert monitor.down(timeout=30) and monitor.mode == LAND_MODE
+    assert_replays_unchanged(record)
+
+
+def test_sigkill_of_fly_leaves_it_to_the_autopilots_gcs_failsafe(
+    tmp_path: Path, flight: Any
+) -> None:
+    """fly's own 1 Hz heartbeat is what ArduPilot's GCS failsafe watches: when fly dies
+    without an ending, the autopilot lands by itself (FS_GCS_ENABLE 5: always land)."""
+    mission = write_mission(
+        tmp_path,
+        "    return [api.executeBehavior('TAKE_OFF'),\n"
+        f"            api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG})]\n",
+    )
+    with null_modem() as (ground, vehicle):
+        sitl = flight(
+            Sitl, tmp_path, serial0=f"uart:{vehicle}:57600", params={**SLOW, "FS_GCS_ENABLE": 5}
+        )
+        fly = flight(Fly, fly_args(mission, f"{ground},57600", tmp_path / "flight.mcap"))
+        fly.wait_for("start    GO_TO_POINT")
+        monitor = flight(Monitor, sitl)
+        assert monitor.wait_for(lambda m: m.mode == GUIDED_MODE and m.armed is True, 30)
+        fly.popen.kill()
+        fly.popen.wait(10)
+        assert monitor.wait_for(lambda m: m.mode == LAND_MODE, timeout=30)
+        assert monitor.down(timeout=60)
