@@ -241,11 +241,16 @@ def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
     # (mavsim's EKF took 2 vehicle seconds before that).
     assert first_command_ns is not None and first_command_ns < 100_000_000
     # The unchanged flight replays with no difference, open and closed loop (the
-    # closed loop runs the recorded mission and behaviors against the recorded vehicle).
-    for mode in (Mode.open, Mode.closed):
-        replayed = replay_recording(record, ReplayOptions(mode=mode))
+    # closed loop runs the recorded commands, or the recorded mission when trusted, with
+    # the real behaviors against the recorded vehicle).
+    for mode, trusted in ((Mode.open, False), (Mode.closed, False), (Mode.closed, True)):
+        options = ReplayOptions(mode=mode, trust_recording=trusted)
+        replayed = replay_recording(record, options)
         assert replayed.diff is not None and replayed.diff.compared == 9, mode
         assert replayed.equal, (mode, [d.message for d in replayed.diff.differences])
+        if mode is Mode.closed:
+            ran_script = not any("was not run" in note for note in replayed.notes)
+            assert ran_script == trusted, replayed.notes
 
 
 # -- link loss --------------------------------------------------------------------------------

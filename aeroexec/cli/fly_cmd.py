@@ -16,7 +16,7 @@ from aeroexec.cli.project import (
     project,
     project_behaviors,
 )
-from aeroexec.cli.run_cmd import finish, print_row, print_summary
+from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome
 from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
 from aeroexec.mavlink.vehicle import MavlinkVehicle
 from aeroexec.mission.activity import ActivityLog
@@ -159,7 +159,10 @@ def fly_command(
         for action in result.ending.actions:
             typer.echo(f"ending: {action}")
         typer.echo(f"ending: vehicle {result.ending.last_seen}")
-    finish(result, debug)
+    # The flight's own ending says what became of the vehicle (last, in one line): the
+    # simulator's "vehicle lost" verdict is not needed here.
+    mission_ok = report_outcome(result, debug, vehicle=False)
     if not result.safe:
         error_line(f"aeroexec: {result.problem()}")
+    if not (mission_ok and result.safe):
         raise typer.Exit(1)

@@ -149,6 +149,13 @@ def run(
 def finish(result: SessionResult, debug: bool) -> None:
     """Say where the recording is, and exit 1 (with the reason, at the mission's own
     file:line) if the mission did not end well or lost its vehicle."""
+    if not report_outcome(result, debug, vehicle=True):
+        raise typer.Exit(1)
+
+
+def report_outcome(result: SessionResult, debug: bool, vehicle: bool) -> bool:
+    """Say where the recording is and, on stderr, why the mission did not end well (and,
+    with `vehicle`, that it lost its vehicle); True if it ended well."""
     if result.recording:
         typer.echo(f"recorded to {result.recording}")
     outcome = result.outcome
@@ -160,11 +167,12 @@ def finish(result: SessionResult, debug: bool) -> None:
             error_line(f"{where}mission stopped: {outcome.error} (--max-sim-time)")
         else:
             error_line(f"{where}mission failed: {outcome.error}")
-        raise typer.Exit(1)
-    if result.vehicle_lost:
+        return False
+    if vehicle and result.vehicle_lost:
         since = next(
             (t for t, fault in reversed(result.faults) if fault == result.vehicle_lost), None
         )
         at = f" at {since / NS_PER_S:.1f} s" if since is not None else ""
         error_line(f"mission failed: the vehicle was lost: fault {result.vehicle_lost}{at}")
-        raise typer.Exit(1)
+        return False
+    return True

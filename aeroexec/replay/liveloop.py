@@ -82,8 +82,12 @@ class RecordedClock:
     def now_ns(self) -> int:
         return self._now
 
+    def upcoming_ns(self) -> int:
+        """When the next step will be: a recorded command goes in before it, as in flight."""
+        return self._next if self._next is not None else self._now + self.tick_ns
+
     def advance(self) -> int:
-        upcoming = self._next if self._next is not None else self._now + self.tick_ns
+        upcoming = self.upcoming_ns()
         if self.stop_ns is not None and upcoming > self.stop_ns:
             self.stop_ns = None  # once: what follows (the ending) steps on
             raise MissionStopped
@@ -140,7 +144,9 @@ def replay_live(
     stopped = end is not None and end[1] not in ("returned", "raised")
     ticks = _ticks(path)
     states = RecordingSource(path).scan(lambda name: name == STATE_TOPIC)
-    clock = RecordedClock(ticks, stop_ns=end[0] if end is not None and stopped else None)
+    # Without a script the recorded commands include the ending's: nothing to stop.
+    stop = end[0] if end is not None and stopped and script is not None else None
+    clock = RecordedClock(ticks, stop_ns=stop)
     vehicle = ReplayVehicle(states, clock)
     builder = OutcomeBuilder(horizon_ns)
     metadata = {
@@ -171,7 +177,9 @@ def replay_live(
             drone=drone,
         )
         if script is None:
-            player = CommandPlayer(executive, wait_for_execute=True)
+            # The recorded vehicle moves on the recorded clock: the commands go at their
+            # recorded times, not when the previous one ends here.
+            player = CommandPlayer(executive)
             player.play(recorded.commands, until_ns=recorded.end_ns)
         else:
             with contextlib.redirect_stdout(_Discard()):
