@@ -68,3 +68,8 @@ class RecordingError(AeroexecError):
 
 class WorldError(AeroexecError):
     """A simulator world file is malformed."""
+
+
+class ReportError(AeroexecError):
+    """A report to merge (a shard's JSON result) cannot be read, or the shards do not
+    make one whole run."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from enum import Enum
 from pathlib import Path
@@ -13,9 +14,13 @@ from aeroexec.catalog.loader import load_catalog
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.replay.diff import Tolerance
-from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for, replay_many
+from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
+from aeroexec.replay.executors import LOCAL, InlineExecutor, executor_for, replay_many
 from aeroexec.replay.inputs import expand_inputs
+from aeroexec.replay.merge import shard_json
 from aeroexec.replay.report import replay_json, replay_junit, replay_text
+from aeroexec.replay.shard import parse_shard, slice_for
+from aeroexec.replay.tasks import retried
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -119,8 +124,33 @@ def replay(
         typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
     ] = False,
     jobs: Annotated[
-        int, typer.Option("--jobs", "-j", min=1, help="Replay this many recordings at once.")
+        int,
+        typer.Option(
+            "--jobs",
+            "-j",
+            min=1,
+            help="Replay this many recordings at once, in worker processes (at most one per CPU).",
+        ),
     ] = 1,
+    shard: Annotated[
+        str | None,
+        typer.Option(
+            "--shard",
+            metavar="K/N",
+            help="Replay only shard K of N (by a hash of each recording's path: stable when "
+            "recordings are added); merge the shards' --format json with "
+            "`aeroexec report merge`.",
+        ),
+    ] = None,
+    executor: Annotated[
+        str,
+        typer.Option(
+            "--executor",
+            metavar="local|ray|ray://HOST:PORT",
+            help="Where replays run: local (--jobs processes), ray (Ray on this machine) or "
+            "a Ray cluster (needs aeroexec[ray]).",
+        ),
+    ] = LOCAL,
     output_format: FormatOption = OutputFormat.text,
     tolerance: ToleranceOption = 0.5,
     position_tolerance: PositionToleranceOption = 0.1,
@@ -139,6 +169,8 @@ def replay(
     Examples:
       aeroexec replay flight.mcap --catalog catalog/new.yaml
       aeroexec replay recordings/ --catalog new.yaml --check --jobs 4 --format junit > replay.xml
+      aeroexec replay recordings/ --shard 2/4 --format json > shard-2.json
+      aeroexec replay s3://flights/2024/ --executor ray://head:10001 --check
 
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs; 2 an input could not be read (one line on stderr each).
@@ -146,27 +178,47 @@ def replay(
     if catalog is not None:
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
     inputs = expand_inputs(recordings)
+    settings = {
+        "catalog": str(catalog) if catalog is not None else None,
+        "mode": mode.value if mode is not None else None,
+        "tolerance_s": tolerance,
+        "position_tolerance_m": position_tolerance,
+    }
+    part = None
+    if shard is not None:
+        part = slice_for([i.path for i in inputs], parse_shard(shard), settings)
+        inputs = [inputs[p] for p in part.positions]
     paths = [i.path for i in inputs if i.error is None]
     _check_outputs(paths, output, out_dir)
+    if executor.startswith("ray://") and (output is not None or out_dir is not None):
+        raise AeroexecError(
+            "-o/--output and --out-dir write where the replay runs: not on a cluster (ray://)"
+        )
     options = ReplayOptions(
         catalog=str(catalog) if catalog is not None else None,
         mode=mode,
         output=output,
         tolerance=tolerance_of(tolerance, position_tolerance),
     )
-    progress = _progress(len(paths))
-    if progress is None:
-        done = replay_many(paths, options, jobs=jobs, out_dir=out_dir)
-    else:
-        with progress:
-            task = progress.add_task("replaying", total=len(paths))
-            done = replay_many(
-                paths,
-                options,
-                jobs=jobs,
-                out_dir=out_dir,
-                on_done=lambda _result: progress.advance(task),
-            )
+    # Workers start before the progress bar's thread (forking a threaded process is
+    # unsafe). Until the report, stdout is stderr: Ray prints its workers' deaths to stdout.
+    with (
+        executor_for(executor, jobs, len(paths)) if paths else InlineExecutor() as where,
+        contextlib.redirect_stdout(sys.stderr),
+    ):
+        progress = _progress(len(paths))
+        if progress is None:
+            done = replay_many(paths, options, out_dir=out_dir, executor=where)
+        else:
+            with progress:
+                task = progress.add_task("replaying", total=len(paths))
+                done = replay_many(
+                    paths,
+                    options,
+                    out_dir=out_dir,
+                    executor=where,
+                    on_done=lambda _result: progress.advance(task),
+                )
     by_path = iter(done)
     results = [
         ReplayResult(recording=i.path, error=i.error) if i.error else next(by_path) for i in inputs
@@ -174,8 +226,11 @@ def replay(
     for result in results:
         if result.error is not None:
             error_line(f"{result.recording}: error: {result.error}")
+    again = retried(results)
+    if again:
+        error_line(f"note: retried after a worker failure: {', '.join(again)}")
     if output_format is OutputFormat.json:
-        typer.echo(replay_json(results))
+        typer.echo(replay_json(results) if part is None else shard_json(results, part))
     elif output_format is OutputFormat.junit:
         typer.echo(replay_junit(results))
     else:
