@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -108,6 +109,15 @@ def _warm() -> None:
     """Nothing: a first task that makes the pool fork its workers now."""
 
 
+def _worker_signals() -> None:
+    """A worker leaves signals to the driver: Ctrl-C (sent to the whole terminal's
+    process group) is ignored, and SIGTERM, which the driver sends to stop it, kills it
+    (a forked worker would otherwise inherit the driver's note-and-go-on handlers)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, signal.SIG_DFL)
+
+
 class ProcessExecutor:
     """`workers` processes on this machine (`--jobs N`)."""
 
@@ -125,16 +135,36 @@ class ProcessExecutor:
         # worker's first task (and before the fork, so workers share its pages).
         import aeroexec.behaviors  # noqa: F401  (lazy: only batches pay for it)
 
-        self._pool = ProcessPoolExecutor(self.workers, mp_context=_start_method())
+        self._pool = ProcessPoolExecutor(
+            self.workers, mp_context=_start_method(), initializer=_worker_signals
+        )
         # With fork, the pool starts all its workers at the first submit: do it now,
         # before the caller starts any thread (forking a threaded process can deadlock).
         self._pool.submit(_warm).result()
         return self
 
-    def __exit__(self, *exc_info: object) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        if kind is not None and not issubclass(kind, Exception):
+            # Interrupted (a signal): replays in progress are abandoned, not awaited (one
+            # may be stuck reading a slow store); the workers are ours to stop.
+            workers = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for worker in workers:  # (Python 3.14 has pool.terminate_workers() for this)
+                worker.terminate()
+            for worker in workers:
+                worker.join(5)
+                if worker.is_alive():
+                    worker.kill()
+            return
+        pool.shutdown(wait=True, cancel_futures=True)
 
     def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
         pool = self._pool
