@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -35,7 +36,7 @@ def corpus(tmp_path_factory: pytest.TempPathFactory) -> Corpus:
 
 
 @pytest.fixture
-def held(corpus: Corpus) -> Server:
+def held(corpus: Corpus) -> Iterator[Server]:
     pytest.importorskip("fsspec", reason="fsspec is not installed (pip install 'aeroexec[ray]')")
     pytest.importorskip("aiohttp", reason="fsspec's HTTP filesystem needs aiohttp")
     with serving(corpus.directory.parent) as server:
