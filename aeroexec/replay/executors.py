@@ -10,18 +10,20 @@ depend on where they ran; only the order in which results arrive does, and `repl
 puts them back in input order.
 
 Why `--jobs 2` was no faster than `--jobs 1` on 40 short recordings (measured on this
-2-core machine, shared): the pool itself costs ~7 ms to start (fork) and ~0.1 ms per
-recording, a result pickles to ~240 bytes, and a worker's first replay pays ~8 ms of
-lazy imports. None of that explains it: each replay used the same CPU time in one
-worker or two, but took twice as long on the clock with two, because the second core
-was busy with other work. What the pool now does about what it controls: workers are
-forked on Linux (spawn and forkserver, the default elsewhere and from Python 3.14,
-re-import aeroexec in every worker: ~0.5 s each), before any thread starts (a progress
-bar's), with the replay stack already imported; there are never more workers than CPUs
-this process may use (more only take turns) nor than recordings; and only a few tasks
-per worker are queued at a time, so the driver holds results, not 10,000 futures.
-`benchmarks/fleet.py` measures the speed-up against the parallelism the machine has
-free at that moment.
+2-core machine, shared with other work): starting the pool costs ~7 ms (fork), a result
+pickles to ~240 bytes, a worker's first replay pays ~8 ms of lazy imports, and handing
+one recording over cost the driver ~0.7 ms of CPU (~5% of a 15 ms replay). None of that
+explains it: each replay used the same CPU time in one worker or two, but took twice as
+long on the clock with two, because the second core was busy with other work; when one
+core is free, two workers only take turns on it. What the pool does about what it
+controls: workers are forked on Linux (spawn and forkserver, the default elsewhere and
+from Python 3.14, import aeroexec again in every worker: ~0.5 s each), before any thread
+starts (a progress bar's), with the replay stack already imported; never more workers
+than CPUs this process may use nor than recordings; recordings go over in batches of up
+to 8 when there are many (the driver's CPU per recording falls to ~0.2 ms); and only two
+batches per worker are queued at a time, so the driver holds results, not 10,000
+futures. `benchmarks/fleet.py` sets the speed-up beside the parallelism the machine has
+free when it is measured.
 """
 
 from __future__ import annotations
@@ -41,9 +43,12 @@ from aeroexec.errors import AeroexecError
 from aeroexec.replay.engine import ReplayOptions, ReplayResult
 from aeroexec.replay.tasks import Completed, ReplayTask, make_tasks, run_task
 
-#: Tasks queued per worker: enough that no worker waits for the next, few enough that
-#: a batch of any size holds only a handful of pending futures.
+#: Batches queued per worker: enough that no worker waits for the next, few enough that
+#: a corpus of any size holds only a handful of pending futures.
 QUEUED_PER_WORKER = 2
+#: At most this many recordings per batch, and at least this many batches per worker.
+MAX_BATCH = 8
+BATCHES_PER_WORKER = 16
 #: How often (s) a waiting driver looks for a signal (Ctrl-C) to act on.
 CHECK_INTERVAL_S = 0.2
 LOCAL = "local"
@@ -170,40 +175,56 @@ class ProcessExecutor:
         pool = self._pool
         if pool is None:
             raise RuntimeError("ProcessExecutor.run outside its `with` block")
-        waiting = iter(tasks)
-        running: dict[Future[ReplayResult], ReplayTask] = {}
+        size = batch_size(len(tasks), self.workers)
+        waiting = iter([list(tasks[i : i + size]) for i in range(0, len(tasks), size)])
+        running: dict[Future[list[ReplayResult]], list[ReplayTask]] = {}
+        unfinished: list[ReplayTask] = []
         broken: str | None = None
 
         def submit() -> None:
             nonlocal broken
-            task = next(waiting, None)
-            if task is None:
+            batch = next(waiting, None)
+            if batch is None:
                 return
             if broken is None:
                 try:
-                    running[pool.submit(run_task, task)] = task
+                    running[pool.submit(run_batch, batch)] = batch
                     return
                 except BrokenProcessPool as exc:
                     broken = str(exc) or "a worker process died"
-            unfinished.append(task)
+            unfinished.extend(batch)
 
-        unfinished: list[ReplayTask] = []
         for _ in range(self.workers * QUEUED_PER_WORKER):
             submit()
         while running:
             done, _ = wait(running, timeout=CHECK_INTERVAL_S, return_when=FIRST_COMPLETED)
             interrupts.check()
             for future in done:
-                task = running.pop(future)
+                batch = running.pop(future)
                 try:
-                    result = future.result()
+                    results = future.result()
                 except BrokenProcessPool as exc:
                     broken = broken or str(exc) or "a worker process died"
-                    result = _lost(task, broken)
-                yield Completed(task.index, result)
+                    results = [_lost(task, broken) for task in batch]
+                for task, result in zip(batch, results, strict=True):
+                    yield Completed(task.index, result)
                 submit()
-        for task in [*unfinished, *waiting]:
+        for batch in waiting:
+            unfinished.extend(batch)
+        for task in unfinished:
             yield Completed(task.index, _lost(task, broken or "the process pool stopped"))
+
+
+def batch_size(tasks: int, workers: int) -> int:
+    """Recordings per hand-over to a worker: 1 for small corpora (no worker waits on a
+    batch at the end), up to MAX_BATCH when there are many (each hand-over costs the driver
+    ~0.7 ms of CPU, ~5% of a short replay)."""
+    return max(1, min(MAX_BATCH, tasks // (workers * BATCHES_PER_WORKER)))
+
+
+def run_batch(batch: list[ReplayTask]) -> list[ReplayResult]:
+    """A worker's share: a few recordings, one after the other."""
+    return [run_task(task) for task in batch]
 
 
 def _lost(task: ReplayTask, why: str) -> ReplayResult:
