@@ -19,7 +19,7 @@ from aeroexec.replay.executors import LOCAL, InlineExecutor, executor_for, repla
 from aeroexec.replay.inputs import expand_inputs
 from aeroexec.replay.merge import shard_json
 from aeroexec.replay.report import replay_json, replay_junit, replay_text
-from aeroexec.replay.shard import parse_shard, slice_for
+from aeroexec.replay.shard import parse_shard, settings_of, slice_for
 from aeroexec.replay.tasks import retried
 
 if TYPE_CHECKING:
@@ -177,16 +177,16 @@ def replay(
     """
     if catalog is not None:
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
+    options = ReplayOptions(
+        catalog=str(catalog) if catalog is not None else None,
+        mode=mode,
+        output=output,
+        tolerance=tolerance_of(tolerance, position_tolerance),
+    )
     inputs = expand_inputs(recordings)
-    settings = {
-        "catalog": str(catalog) if catalog is not None else None,
-        "mode": mode.value if mode is not None else None,
-        "tolerance_s": tolerance,
-        "position_tolerance_m": position_tolerance,
-    }
     part = None
     if shard is not None:
-        part = slice_for([i.path for i in inputs], parse_shard(shard), settings)
+        part = slice_for([i.path for i in inputs], parse_shard(shard), settings_of(options))
         inputs = [inputs[p] for p in part.positions]
     paths = [i.path for i in inputs if i.error is None]
     _check_outputs(paths, output, out_dir)
@@ -194,12 +194,6 @@ def replay(
         raise AeroexecError(
             "-o/--output and --out-dir write where the replay runs: not on a cluster (ray://)"
         )
-    options = ReplayOptions(
-        catalog=str(catalog) if catalog is not None else None,
-        mode=mode,
-        output=output,
-        tolerance=tolerance_of(tolerance, position_tolerance),
-    )
     # Workers start before the progress bar's thread (forking a threaded process is
     # unsafe). Until the report, stdout is stderr: Ray prints its workers' deaths to stdout.
     with (

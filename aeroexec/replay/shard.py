@@ -22,6 +22,7 @@ from pathlib import PurePath
 from typing import Any
 
 from aeroexec.errors import AeroexecError
+from aeroexec.replay.engine import ReplayOptions
 
 _SHARD = re.compile(r"\s*(\d+)\s*/\s*(\d+)\s*")
 #: The version of the `shard` block; `report merge` refuses others.
@@ -98,6 +99,17 @@ class ShardSlice:
             "positions": list(self.positions),
             "settings": self.settings,
         }
+
+
+def settings_of(options: ReplayOptions) -> dict[str, Any]:
+    """What the shards of one run must agree on (JSON values): the catalog, the mode and
+    the tolerances. (Outputs are per shard.)"""
+    return {
+        "catalog": options.catalog,
+        "mode": options.mode.value if options.mode is not None else None,
+        "tolerance_s": options.tolerance.time_s,
+        "position_tolerance_m": options.tolerance.position_m,
+    }
 
 
 def slice_for(names: Sequence[str], shard: Shard, settings: dict[str, Any]) -> ShardSlice:
