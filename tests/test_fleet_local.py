@@ -16,7 +16,9 @@ from pathlib import Path
 import pytest
 from fleet_corpus import Corpus, make_corpus
 from fleet_http import Server, serving, wait_for
+from typer.testing import CliRunner
 
+from aeroexec.cli import app
 from aeroexec.replay import tasks
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult
 from aeroexec.replay.executors import (
@@ -157,3 +159,34 @@ def test_results_are_the_same_in_any_executor_order(corpus: Corpus) -> None:
     two = [r.as_dict() for r in replay_many(corpus.files, options, jobs=2)]
     assert one == two
     assert json.dumps(one).count('"equal": false') == len(corpus.differing) + len(corpus.broken)
+
+
+@pytest.mark.parametrize(
+    ("args", "hidden", "expected"),
+    [
+        (
+            ["--executor", "ray"],
+            ["ray"],
+            "aeroexec: error: --executor ray needs Ray (import of ray halted; None in "
+            "sys.modules): pip install 'aeroexec[ray]'",
+        ),
+        (
+            ["s3://bucket/flights/"],
+            ["fsspec"],
+            "aeroexec: error: recordings named by URL need fsspec: pip install 'aeroexec[ray]'",
+        ),
+    ],
+)
+def test_a_missing_optional_dependency_is_one_line(
+    corpus: Corpus,
+    monkeypatch: pytest.MonkeyPatch,
+    args: list[str],
+    hidden: list[str],
+    expected: str,
+) -> None:
+    for module in hidden:  # as if not installed: importing it raises ImportError
+        monkeypatch.setitem(sys.modules, module, None)
+    monkeypatch.delitem(sys.modules, "aeroexec.replay.ray_executor", raising=False)
+    result = CliRunner().invoke(app, ["replay", *corpus.files[:2], *args])
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [expected]

@@ -129,7 +129,8 @@ def replay(
             "--jobs",
             "-j",
             min=1,
-            help="Replay this many recordings at once, in worker processes (at most one per CPU).",
+            help="Replay this many recordings at once, in worker processes on this machine (at "
+            "most one per CPU; --executor local).",
         ),
     ] = 1,
     shard: Annotated[
