@@ -33,6 +33,7 @@ import json
 import logging
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -205,6 +206,7 @@ def ray_overhead(corpus: Corpus, repeat: int) -> bool:
                         times.append(time.perf_counter() - begin)
         finally:
             ray.shutdown()
+            shutil.rmtree(temp, ignore_errors=True)
     pooled, rayed = statistics.median(pool_times), statistics.median(ray_times)
     ratio = rayed / pooled
     print(f"ray, {n} recordings, median of {repeat}, executors started:")
