@@ -29,6 +29,7 @@ from aeroexec.cli import app
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult
 from aeroexec.replay.executors import replay_many
 from aeroexec.replay.shard import parse_shard, shard_of, slice_for
+from aeroexec.replay.tasks import batch_size, retried
 
 COUNT = 200
 runner = CliRunner()
@@ -310,11 +311,12 @@ def held(corpus: Corpus) -> Iterator[Server]:
         yield server
 
 
-def kill_the_held_worker(
-    server: Server, others_done: Callable[[], bool], killed: list[int]
+def kill_held_workers(
+    server: Server, path: str, others_done: Callable[[int], bool], killed: list[int], times: int
 ) -> None:
-    """Once the held download has started and the other recordings are done, kill the one
-    Ray worker still busy (the one stuck in the download), then let the server go on."""
+    """`times` over: once the download of `path` is held and `others_done(i)`, kill the one
+    Ray worker still busy (the one stuck in the download), holding the next download of
+    `path` again; then let the server go on."""
     try:
         busy: list[int] = []
 
@@ -322,7 +324,14 @@ def kill_the_held_worker(
             busy[:] = busy_ray_workers("replay_on_worker")
             return len(busy) == 1
 
-        if wait_for(server.held.is_set) and wait_for(others_done) and wait_for(alone):
+        for i in range(times):
+            if not (wait_for(server.held.is_set) and wait_for(lambda i=i: others_done(i))):
+                return
+            if not wait_for(alone):
+                return
+            server.held.clear()
+            if i + 1 < times:
+                server.hold.add(path)
             os.kill(busy[0], signal.SIGKILL)
             killed.append(busy[0])
     finally:
@@ -340,7 +349,9 @@ def test_a_killed_worker_is_retried_and_the_report_says_so(
     path = f"/{corpus.directory.name}/{Path(name).name}"
     held.hold.add(path)
     killed: list[int] = []
-    killer = threading.Thread(target=kill_the_held_worker, args=(held, lambda: True, killed))
+    killer = threading.Thread(
+        target=kill_held_workers, args=(held, path, lambda _: True, killed, 1)
+    )
     killer.start()
     code, out, err = cli(
         "replay",
@@ -367,14 +378,21 @@ def test_a_killed_worker_is_retried_and_the_report_says_so(
 def test_a_recording_whose_worker_always_dies_is_one_error_result(
     corpus: Corpus, reference: tuple, held: Server, local_ray: None
 ) -> None:
+    """With retries off and batches of 2 (71 recordings on 2 CPUs): the batch dies, its two
+    recordings are tried alone, the held one dies again and is an error, its batch-mate is
+    replayed (and says so), and the job goes on."""
     name = sorted(corpus.differing)[1]
     path = f"/{corpus.directory.name}/{Path(name).name}"
     held.hold.add(path)
-    others = [corpus.files[i] for i in (0, 1, 2, 3)]
+    others = [f for f in corpus.files if f not in corpus.broken and f != name][:70]
+    assert batch_size(1 + len(others), 2) == 2
     done: list[ReplayResult] = []
     killed: list[int] = []
+    # First: everything but the held recording's batch-mate is done; then: the mate too.
+    waits = (len(others) - 1, len(others))
     killer = threading.Thread(
-        target=kill_the_held_worker, args=(held, lambda: len(done) >= len(others), killed)
+        target=kill_held_workers,
+        args=(held, path, lambda i: len(done) >= waits[i], killed, 2),
     )
     killer.start()
     options = ReplayOptions(catalog=str(corpus.narrowed), mode=Mode.open)
@@ -385,9 +403,12 @@ def test_a_recording_whose_worker_always_dies_is_one_error_result(
             [held.url + path, *others], options, executor=ray_executor, on_done=done.append
         )
     killer.join()
-    assert len(killed) == 1, "no Ray worker was found stuck in the held download"
+    assert len(killed) == 2, "no Ray worker was found stuck in the held download"
     assert results[0].error == (
-        "not replayed: the Ray worker failed on each of 1 attempts (WorkerCrashedError)"
+        "not replayed: the Ray worker failed on each of 2 attempts (WorkerCrashedError)"
     )
-    for result, other in zip(results[1:], others, strict=True):  # the job went on
+    mate = row_of(reference, others[0])
+    assert results[1].as_dict() == {**mate, "notes": [*mate["notes"], RETRIED]}
+    for result, other in zip(results[2:], others[1:], strict=True):  # the job went on
         assert result.as_dict() == row_of(reference, other)
+    assert retried(results) == [others[0]]

@@ -41,14 +41,18 @@ from typing import Protocol
 from aeroexec import interrupts
 from aeroexec.errors import AeroexecError
 from aeroexec.replay.engine import ReplayOptions, ReplayResult
-from aeroexec.replay.tasks import Completed, ReplayTask, make_tasks, run_task
+from aeroexec.replay.tasks import (
+    Completed,
+    ReplayTask,
+    batch_size,
+    make_tasks,
+    run_batch,
+    run_task,
+)
 
 #: Batches queued per worker: enough that no worker waits for the next, few enough that
 #: a corpus of any size holds only a handful of pending futures.
 QUEUED_PER_WORKER = 2
-#: At most this many recordings per batch, and at least this many batches per worker.
-MAX_BATCH = 8
-BATCHES_PER_WORKER = 16
 #: How often (s) a waiting driver looks for a signal (Ctrl-C) to act on.
 CHECK_INTERVAL_S = 0.2
 LOCAL = "local"
@@ -213,18 +217,6 @@ class ProcessExecutor:
             unfinished.extend(batch)
         for task in unfinished:
             yield Completed(task.index, _lost(task, broken or "the process pool stopped"))
-
-
-def batch_size(tasks: int, workers: int) -> int:
-    """Recordings per hand-over to a worker: 1 for small corpora (no worker waits on a
-    batch at the end), up to MAX_BATCH when there are many (each hand-over costs the driver
-    ~0.7 ms of CPU, ~5% of a short replay)."""
-    return max(1, min(MAX_BATCH, tasks // (workers * BATCHES_PER_WORKER)))
-
-
-def run_batch(batch: list[ReplayTask]) -> list[ReplayResult]:
-    """A worker's share: a few recordings, one after the other."""
-    return [run_task(task) for task in batch]
 
 
 def _lost(task: ReplayTask, why: str) -> ReplayResult:

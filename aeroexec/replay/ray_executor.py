@@ -1,17 +1,20 @@
 """`--executor ray` and `--executor ray://HOST:PORT`: replays as Ray tasks.
 
-One Ray task per recording, running the same `run_task` as every other executor. Ray
-does the scheduling, the placement and the retries; this module only submits, collects
-and says what happened:
+Ray tasks running the same `run_task` as every other executor, a few recordings each
+(up to 8, when there are many: a Ray task costs ~5 ms of a 2-CPU machine's time, as much
+as half a short replay). Ray does the scheduling, the placement and the retries; this
+module only submits, collects and says what happened:
 
-* results stream back as tasks finish (`ray.wait`), at most a few per CPU of the cluster
-  in flight, so the driver holds one small result per recording and the object store
-  next to nothing;
+* results stream back as tasks finish (`ray.wait`), at most a few tasks per CPU of the
+  cluster in flight, so the driver holds one small result per recording and the object
+  store next to nothing;
 * a broken recording is an error *result* (`run_task` never raises for one), so Ray never
   retries it and the job never fails because of it;
 * a worker that dies (killed, out of memory, its node lost) is Ray's to handle: the task
-  is retried (`max_retries`, Ray's default 3) and the result notes that it was; when every
-  attempt dies, that recording is an error result naming Ray's reason;
+  is retried (`max_retries`, Ray's default 3) and each of its recordings notes that it
+  was replayed again. When every attempt of a batch dies, its recordings are tried again
+  one per task, so that only a recording that kills its worker every time ends as an
+  error result naming Ray's reason;
 * `ray://` connects through Ray Client and ships this process's aeroexec package to the
   workers (`runtime_env` `py_modules`), so the cluster replays with the code under test,
   not with whatever aeroexec its image has; its other dependencies must be installed
@@ -24,6 +27,7 @@ that imports it, and only `--executor ray...` imports this module.
 from __future__ import annotations
 
 import logging
+from collections import deque
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -35,11 +39,17 @@ import aeroexec
 from aeroexec.errors import AeroexecError
 from aeroexec.interrupts import check
 from aeroexec.replay.engine import ReplayResult
-from aeroexec.replay.tasks import Completed, ReplayTask, run_task, with_retry_note
+from aeroexec.replay.tasks import (
+    Completed,
+    ReplayTask,
+    batch_size,
+    run_batch,
+    with_retry_note,
+)
 
 #: Ray's default for tasks, said out loud: how often a task whose worker died is rerun.
 MAX_RETRIES = 3
-#: Tasks in flight per CPU of the cluster (and at least MIN_IN_FLIGHT).
+#: Ray tasks in flight per CPU of the cluster (and at least MIN_IN_FLIGHT).
 IN_FLIGHT_PER_CPU = 2
 MIN_IN_FLIGHT = 16
 #: How long (s) the driver waits for results before looking for a signal (Ctrl-C).
@@ -57,9 +67,9 @@ def _attempt() -> int:
         return 0
 
 
-def replay_on_worker(task: ReplayTask) -> tuple[ReplayResult, int]:
-    """The Ray task: a recording's result and the attempt that produced it."""
-    return run_task(task), _attempt()
+def replay_on_worker(batch: list[ReplayTask]) -> tuple[list[ReplayResult], int]:
+    """The Ray task: a few recordings' results and the attempt that produced them."""
+    return run_batch(batch), _attempt()
 
 
 def probe() -> str:
@@ -135,23 +145,24 @@ class RayExecutor:
                 f"{aeroexec.__version__}: replays would not test this version"
             )
 
-    def _in_flight(self) -> int:
-        cpus = int(ray.cluster_resources().get("CPU", 1))
-        return max(MIN_IN_FLIGHT, IN_FLIGHT_PER_CPU * cpus)
-
     def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
         if self._remote is None:
             raise RuntimeError("RayExecutor.run outside its `with` block")
-        waiting = iter(tasks)
-        running: dict[Any, ReplayTask] = {}
+        cpus = self._cpus()
+        size = batch_size(len(tasks), cpus)
+        waiting = deque(list(tasks[i : i + size]) for i in range(0, len(tasks), size))
+        running: dict[Any, list[ReplayTask]] = {}
+        #: Attempts that died before, per task index (its batch's, before it ran alone).
+        spent: dict[int, int] = {}
+
+        window = max(MIN_IN_FLIGHT, IN_FLIGHT_PER_CPU * cpus)
 
         def submit() -> None:
-            task = next(waiting, None)
-            if task is not None:
-                running[self._remote.remote(task)] = task
+            while waiting and len(running) < window:
+                batch = waiting.popleft()
+                running[self._remote.remote(batch)] = batch
 
-        for _ in range(self._in_flight()):
-            submit()
+        submit()
         try:
             while running:
                 refs = list(running)
@@ -160,25 +171,53 @@ class RayExecutor:
                 if ready:  # and every other one already there, without waiting again
                     ready, _ = ray.wait(refs, num_returns=len(refs), timeout=0)
                 for ref in ready:
-                    task = running.pop(ref)
-                    yield Completed(task.index, self._result(ref, task))
+                    batch = running.pop(ref)
+                    yield from self._completed(ref, batch, waiting, spent)
                     submit()
         finally:
             for ref in running:  # interrupted (or the caller stopped reading): stop them
                 ray.cancel(ref, force=True)
 
-    def _result(self, ref: Any, task: ReplayTask) -> ReplayResult:
+    def _completed(
+        self,
+        ref: Any,
+        batch: list[ReplayTask],
+        waiting: deque[list[ReplayTask]],
+        spent: dict[int, int],
+    ) -> Iterator[Completed]:
+        """The results of a finished Ray task; a batch whose worker died on every attempt
+        goes back to `waiting` one recording per task, so that only the recording that
+        kills its worker (if one does) ends as an error."""
         try:
-            result, attempt = ray.get(ref)
-        except ray.exceptions.RayTaskError as exc:  # run_task raised: not the recording
-            return _error(task, f"the Ray task failed: {_first_line(exc)}")
-        except ray.exceptions.RayError as exc:  # the worker or its node died every time
-            return _error(
-                task,
-                f"not replayed: the Ray worker failed on each of {self.max_retries + 1} "
-                f"attempts ({type(exc).__name__})",
+            results, attempt = ray.get(ref)
+        except ray.exceptions.RayTaskError as exc:  # not a recording's doing: a bug, or
+            for task in batch:  # a cluster that cannot unpickle the task
+                yield Completed(
+                    task.index, _error(task, f"the Ray task failed: {_first_line(exc)}")
+                )
+            return
+        except ray.exceptions.RayError as exc:  # its worker died on every attempt
+            for task in batch:
+                spent[task.index] = spent.get(task.index, 0) + self.max_retries + 1
+            if len(batch) > 1:
+                waiting.extendleft([task] for task in reversed(batch))
+                return
+            (task,) = batch
+            yield Completed(
+                task.index,
+                _error(
+                    task,
+                    f"not replayed: the Ray worker failed on each of {spent[task.index]} "
+                    f"attempts ({type(exc).__name__})",
+                ),
             )
-        return with_retry_note(result, attempt + 1) if attempt > 0 else result
+            return
+        for task, result in zip(batch, results, strict=True):
+            runs = spent.get(task.index, 0) + attempt + 1
+            yield Completed(task.index, with_retry_note(result, runs) if runs > 1 else result)
+
+    def _cpus(self) -> int:
+        return max(1, int(ray.cluster_resources().get("CPU", 1)))
 
 
 def _error(task: ReplayTask, text: str) -> ReplayResult:

@@ -19,6 +19,10 @@ from aeroexec.errors import AeroexecError
 from aeroexec.replay.engine import ReplayOptions, ReplayResult, output_for, replay_file
 from aeroexec.replay.remote import fetched, is_url
 
+#: At most this many recordings per hand-over to a worker, and at least this many
+#: hand-overs per worker (so that none waits idle on a long batch at the end).
+MAX_BATCH = 8
+BATCHES_PER_WORKER = 16
 #: Starts the note on a result that Ray had to run again after its worker failed.
 RETRY_NOTE = "retried after a worker failure"
 
@@ -79,6 +83,18 @@ def run_task(task: ReplayTask) -> ReplayResult:
         return _failed(task, text)
     except Exception as exc:  # a bug met on this input: report it, replay the others
         return _failed(task, f"replay failed: {_bug(exc)} (please report this, with the file)")
+
+
+def batch_size(tasks: int, workers: int) -> int:
+    """Recordings per hand-over to a worker: 1 for small corpora (no worker waits on a
+    batch at the end), up to MAX_BATCH when there are many (each hand-over costs the driver
+    ~0.7 ms of CPU in a process pool, and measured ~5 ms of wall time on a local Ray)."""
+    return max(1, min(MAX_BATCH, tasks // (workers * BATCHES_PER_WORKER)))
+
+
+def run_batch(batch: list[ReplayTask]) -> list[ReplayResult]:
+    """A worker's share: a few recordings, one after the other."""
+    return [run_task(task) for task in batch]
 
 
 def _failed(task: ReplayTask, error: str) -> ReplayResult:
