@@ -111,9 +111,12 @@ def test_a_pool_worker_that_dies_gives_error_results_not_a_crash(
     assert [r.error for r in results[1:]] == [None, None, None]
 
 
-def test_a_signal_stops_a_parallel_replay_without_waiting_for_its_workers(
-    corpus: Corpus, held: Server
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_a_signal_stops_a_parallel_replay_and_its_workers(
+    corpus: Corpus, held: Server, signum: signal.Signals
 ) -> None:
+    """SIGTERM: the driver stops its workers (one is stuck in a slow download) and exits
+    143 at once. SIGKILL: the driver cannot, and the workers die with it."""
     url, path = url_of(held, corpus, 0)
     held.hold.add(path)
     started = time.monotonic()
@@ -127,17 +130,30 @@ def test_a_signal_stops_a_parallel_replay_without_waiting_for_its_workers(
         assert wait_for(held.held.is_set, 60), "the held download never started"
         children = [int(p) for p in _children(replay.pid)]
         assert len(children) == 2
-        replay.send_signal(signal.SIGTERM)
+        replay.send_signal(signum)
         out, err = replay.communicate(timeout=30)
+        gone = wait_for(lambda: not any(_alive(pid) for pid in children), 10)
     finally:
         if replay.poll() is None:
             replay.kill()
         held.release()
     assert time.monotonic() - started < 30  # not the 60 s the download is held
-    assert replay.returncode == 128 + signal.SIGTERM
-    assert out == ""
-    assert err.strip().splitlines()[-1] == "aeroexec: interrupted by SIGTERM"
-    assert not [pid for pid in children if Path(f"/proc/{pid}").exists()]
+    assert gone, "a worker outlived its driver"
+    if signum == signal.SIGTERM:
+        assert replay.returncode == 128 + signal.SIGTERM
+        assert out == ""
+        assert err.strip().splitlines()[-1] == "aeroexec: interrupted by SIGTERM"
+    else:
+        assert replay.returncode == -signal.SIGKILL
+
+
+def _alive(pid: int) -> bool:
+    """Running, and not a zombie waiting for its parent to collect it."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
 
 
 def _children(pid: int) -> list[str]:

@@ -28,6 +28,7 @@ free when it is measured.
 
 from __future__ import annotations
 
+import ctypes
 import multiprocessing
 import os
 import signal
@@ -56,6 +57,8 @@ QUEUED_PER_WORKER = 2
 #: How often (s) a waiting driver looks for a signal (Ctrl-C) to act on.
 CHECK_INTERVAL_S = 0.2
 LOCAL = "local"
+#: prctl(2): the signal a process gets when its parent dies.
+_PR_SET_PDEATHSIG = 1
 
 
 class Executor(Protocol):
@@ -118,13 +121,21 @@ def _warm() -> None:
     """Nothing: a first task that makes the pool fork its workers now."""
 
 
-def _worker_signals() -> None:
+def _worker_signals(driver: int) -> None:
     """A worker leaves signals to the driver: Ctrl-C (sent to the whole terminal's
     process group) is ignored, and SIGTERM, which the driver sends to stop it, kills it
-    (a forked worker would otherwise inherit the driver's note-and-go-on handlers)."""
+    (a forked worker would otherwise inherit the driver's note-and-go-on handlers). And
+    it dies with the driver: a driver killed outright (SIGKILL, the OOM killer, a CI
+    timeout) cannot stop it, and its siblings keep the task queue open, so it would
+    wait for work forever."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for signum in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(signum, signal.SIG_DFL)
+    if sys.platform == "linux":
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+        if os.getppid() != driver:  # the driver died before prctl took effect
+            os._exit(1)
 
 
 class ProcessExecutor:
@@ -145,7 +156,10 @@ class ProcessExecutor:
         import aeroexec.behaviors  # noqa: F401  (lazy: only batches pay for it)
 
         self._pool = ProcessPoolExecutor(
-            self.workers, mp_context=_start_method(), initializer=_worker_signals
+            self.workers,
+            mp_context=_start_method(),
+            initializer=_worker_signals,
+            initargs=(os.getpid(),),
         )
         # With fork, the pool starts all its workers at the first submit: do it now,
         # before the caller starts any thread (forking a threaded process can deadlock).
