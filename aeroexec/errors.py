@@ -101,3 +101,8 @@ class OutputLost(BaseException):
 
     def __reduce__(self) -> tuple[object, ...]:
         return (type(self), (self.error,))
+
+
+class ReportError(AeroexecError):
+    """A report to merge (a shard's JSON result) cannot be read, or the shards do not
+    make one whole run."""

@@ -21,7 +21,7 @@ DOC = REPO / "docs" / "ci.md"
 
 def workflow() -> dict[str, Any]:
     blocks = re.findall(r"```yaml\n(.*?)```", DOC.read_text(encoding="utf-8"), re.S)
-    assert len(blocks) == 1
+    # The first block is the workflow; the shard matrix that follows: test_fleet_docs.py.
     document = yaml.safe_load(blocks[0])
     assert isinstance(document, dict)
     return document

@@ -12,6 +12,7 @@ from aeroexec.cli import view_cmd  # noqa: F401  (registers `view`)
 from aeroexec.cli import layout_cmd  # noqa: F401  (registers `layout`)
 from aeroexec.cli import replay_cmd  # noqa: F401  (registers `replay`)
 from aeroexec.cli import diff_cmd  # noqa: F401  (registers `diff`)
+from aeroexec.cli import report_cmd  # noqa: F401  (registers `report merge`)
 from aeroexec.cli import import_cmd  # noqa: F401  (registers `import`)
 from aeroexec.cli import behaviors_cmd  # noqa: F401  (registers `behaviors`)
 from aeroexec.cli.app import app

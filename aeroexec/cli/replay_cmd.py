@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from enum import Enum
@@ -17,9 +18,13 @@ from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins import discover
 from aeroexec.replay.diff import Tolerance
-from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for, replay_many
+from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
+from aeroexec.replay.executors import LOCAL, InlineExecutor, executor_for, replay_many
 from aeroexec.replay.inputs import expand_inputs
+from aeroexec.replay.merge import shard_json
 from aeroexec.replay.report import replay_json, replay_junit, replay_text, start_timing
+from aeroexec.replay.shard import parse_shard, settings_of, slice_for
+from aeroexec.replay.tasks import retried
 
 if TYPE_CHECKING:
     from rich.progress import Progress
@@ -123,9 +128,35 @@ def replay(
         typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
     ] = False,
     jobs: Annotated[
-        int, typer.Option("--jobs", "-j", min=1, help="Replay this many recordings at once.")
+        int,
+        typer.Option(
+            "--jobs",
+            "-j",
+            min=1,
+            help="Replay this many recordings at once, in worker processes on this machine (at "
+            "most one per CPU; --executor local).",
+        ),
     ] = 1,
     behaviors: BehaviorsOption = None,
+    shard: Annotated[
+        str | None,
+        typer.Option(
+            "--shard",
+            metavar="K/N",
+            help="Replay only shard K of N (by a hash of each recording's path: stable when "
+            "recordings are added); merge the shards' --format json with "
+            "`aeroexec report merge`.",
+        ),
+    ] = None,
+    executor: Annotated[
+        str,
+        typer.Option(
+            "--executor",
+            metavar="local|ray|ray://HOST:PORT",
+            help="Where replays run: local (--jobs processes), ray (Ray on this machine) or "
+            "a Ray cluster (needs aeroexec[ray]).",
+        ),
+    ] = LOCAL,
     output_format: FormatOption = OutputFormat.text,
     tolerance: ToleranceOption = 0.5,
     position_tolerance: PositionToleranceOption = 0.1,
@@ -169,6 +200,8 @@ def replay(
       aeroexec replay flight.mcap --catalog catalog/new.yaml
       aeroexec replay flight.mcap --mission missions/appendix_c.py -o again.mcap
       aeroexec replay recordings/ --catalog new.yaml --check --jobs 4 --format junit > replay.xml
+      aeroexec replay recordings/ --shard 2/4 --format json > shard-2.json
+      aeroexec replay s3://flights/2024/ --executor ray://head:10001 --check
 
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs; 2 an input could not be read (one line on stderr each).
@@ -182,9 +215,6 @@ def replay(
     discover(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
-    inputs = expand_inputs(recordings)
-    paths = [i.path for i in inputs if i.error is None]
-    _check_outputs(paths, output, out_dir)
     options = ReplayOptions(
         catalog=str(catalog) if catalog is not None else None,
         mode=mode,
@@ -194,19 +224,36 @@ def replay(
         mission=str(mission) if mission is not None else None,
         trust_recording=trust_recording,
     )
-    progress = _progress(len(paths))
-    if progress is None:
-        done = replay_many(paths, options, jobs=jobs, out_dir=out_dir)
-    else:
-        with progress:
-            task = progress.add_task("replaying", total=len(paths))
-            done = replay_many(
-                paths,
-                options,
-                jobs=jobs,
-                out_dir=out_dir,
-                on_done=lambda _result: progress.advance(task),
-            )
+    inputs = expand_inputs(recordings)
+    part = None
+    if shard is not None:
+        part = slice_for([i.path for i in inputs], parse_shard(shard), settings_of(options))
+        inputs = [inputs[p] for p in part.positions]
+    paths = [i.path for i in inputs if i.error is None]
+    _check_outputs(paths, output, out_dir)
+    if executor.startswith("ray://") and (output is not None or out_dir is not None):
+        raise AeroexecError(
+            "-o/--output and --out-dir write where the replay runs: not on a cluster (ray://)"
+        )
+    # Workers start before the progress bar's thread (forking a threaded process is
+    # unsafe). Until the report, stdout is stderr: Ray prints its workers' deaths to stdout.
+    with (
+        executor_for(executor, jobs, len(paths)) if paths else InlineExecutor() as where,
+        contextlib.redirect_stdout(sys.stderr),
+    ):
+        progress = _progress(len(paths))
+        if progress is None:
+            done = replay_many(paths, options, out_dir=out_dir, executor=where)
+        else:
+            with progress:
+                task = progress.add_task("replaying", total=len(paths))
+                done = replay_many(
+                    paths,
+                    options,
+                    out_dir=out_dir,
+                    executor=where,
+                    on_done=lambda _result: progress.advance(task),
+                )
     by_path = iter(done)
     results = [
         ReplayResult(recording=i.path, error=i.error) if i.error else next(by_path) for i in inputs
@@ -214,8 +261,11 @@ def replay(
     for result in results:
         if result.error is not None:
             error_line(f"{result.recording}: error: {result.error}")
+    again = retried(results)
+    if again:
+        error_line(f"note: retried after a worker failure: {', '.join(again)}")
     if output_format is OutputFormat.json:
-        typer.echo(replay_json(results))
+        typer.echo(replay_json(results) if part is None else shard_json(results, part))
     elif output_format is OutputFormat.junit:
         typer.echo(replay_junit(results, timing=timing, seconds=time.perf_counter() - started))
     else:

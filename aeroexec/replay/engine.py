@@ -2,7 +2,7 @@
 
     result = replay_recording("flight.mcap", ReplayOptions(catalog="new.yaml"))
     result.diff.differences      # what changed, per mission command
-    results = replay_many(paths, options, jobs=4)   # in input order, deterministic
+    # batches: aeroexec.replay.executors.replay_many (processes, Ray)
 
 Mode: closed loop (re-simulate the mission) by default for simulated recordings
 (metadata clock "sim"), open loop (recorded inputs into the executive) for the rest.
@@ -14,14 +14,11 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
 from typing import Any
 
-from aeroexec import interrupts
 from aeroexec.bags.bagfile import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark
@@ -34,7 +31,6 @@ from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
 from aeroexec.replay.liveloop import is_live, replay_live
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S
-from aeroexec.replay.workers import completed_or_interrupted
 
 
 class Mode(str, Enum):
@@ -246,39 +242,6 @@ def _mode_name(options: ReplayOptions) -> str | None:
 def output_for(recording: str, out_dir: str) -> str:
     """Where `--out-dir` writes the replay of `recording` (a bag's replay is an MCAP)."""
     return str(Path(out_dir) / (Path(recording).stem + ".mcap"))
-
-
-def replay_many(
-    paths: Sequence[str],
-    options: ReplayOptions,
-    *,
-    jobs: int = 1,
-    out_dir: str | None = None,
-    on_done: Callable[[ReplayResult], None] | None = None,
-) -> list[ReplayResult]:
-    """Replay every recording, `jobs` at a time in separate processes; the results come
-    back in the order of `paths` whatever finishes first. `out_dir`: write each replay
-    to `out_dir/<recording stem>.mcap`. `on_done` is told each result as it finishes."""
-    per_path = [
-        replace(options, output=output_for(p, out_dir)) if out_dir is not None else options
-        for p in paths
-    ]
-    if jobs <= 1 or len(paths) <= 1:
-        results = []
-        for path, opts in zip(paths, per_path, strict=True):
-            result = replay_file(path, opts)
-            if on_done is not None:
-                on_done(result)
-            results.append(result)
-        return results
-    with ProcessPoolExecutor(
-        max_workers=min(jobs, len(paths)), initializer=interrupts.in_worker_process
-    ) as pool:
-        futures = [pool.submit(replay_file, p, o) for p, o in zip(paths, per_path, strict=True)]
-        for future in completed_or_interrupted(pool, futures):
-            if on_done is not None:
-                on_done(future.result())
-        return [future.result() for future in futures]
 
 
 def diff_recordings(

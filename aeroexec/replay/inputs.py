@@ -1,11 +1,14 @@
 """Which recordings a command line names: files, directories (every `*.mcap` and ROS 1
-`*.bag` inside, sorted) and glob patterns (sorted matches), in the order given."""
+`*.bag` inside, sorted) and glob patterns (sorted matches), in the order given; the same
+for URLs (`s3://bucket/flights/`, through fsspec: aeroexec.replay.remote)."""
 
 from __future__ import annotations
 
 import glob
 from dataclasses import dataclass
 from pathlib import Path
+
+from aeroexec.replay.remote import expand_url, is_url
 
 _GLOB_CHARS = frozenset("*?[")
 #: What a directory contributes.
@@ -24,6 +27,11 @@ class Input:
 def expand_inputs(arguments: list[str]) -> list[Input]:
     out: list[Input] = []
     for argument in arguments:
+        if is_url(argument):
+            out.extend(
+                Input(url, error) for url, error in expand_url(argument, SUFFIXES, EMPTY_DIRECTORY)
+            )
+            continue
         path = Path(argument)
         if path.is_dir():
             found = sorted(

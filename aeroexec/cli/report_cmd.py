@@ -1,0 +1,97 @@
+"""`aeroexec report merge SHARD.json...`: the shards of a sharded replay, as one report."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.replay_cmd import FormatOption, OutputFormat
+from aeroexec.errors import Mark, ReportError
+from aeroexec.replay.merge import merge_shards, read_shard
+from aeroexec.replay.report import replay_json, replay_junit, replay_text
+
+report_app = typer.Typer(
+    help="Work with replay reports: merge the shards of a CI matrix into one.",
+    no_args_is_help=True,
+    rich_markup_mode=None,
+)
+app.add_typer(report_app, name="report")
+
+
+def _write(path: str, text: str) -> None:
+    """All of `text` at `path`, or nothing there (a temporary file renamed into place)."""
+    target = Path(path)
+    try:
+        descriptor, temporary = tempfile.mkstemp(
+            prefix=f".{target.name}.", dir=target.parent if str(target.parent) else "."
+        )
+    except OSError as exc:
+        raise ReportError(f"cannot write: {exc.strerror or exc}", Mark(path)) from None
+    try:
+        with os.fdopen(descriptor, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(temporary, target)
+    except OSError as exc:
+        Path(temporary).unlink(missing_ok=True)
+        raise ReportError(f"cannot write: {exc.strerror or exc}", Mark(path)) from None
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+@report_app.command("merge")
+@guarded
+def merge(
+    shards: Annotated[
+        list[str],
+        typer.Argument(
+            metavar="FILE...",
+            help="The JSON reports of every shard (`aeroexec replay --shard K/N --format json`).",
+            show_default=False,
+        ),
+    ],
+    output_format: FormatOption = OutputFormat.text,
+    output: Annotated[
+        str | None,
+        typer.Option("--output", "-o", metavar="FILE", help="Write the report here (else stdout)."),
+    ] = None,
+    check: Annotated[
+        bool,
+        typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
+    ] = False,
+) -> None:
+    """Merge the JSON reports of a sharded replay into the report the unsharded replay
+    gives: the same recordings in the same order, the same text, JSON or JUnit, the same
+    exit code. Refuses (exit 2) shards that do not make one whole run: one missing or
+    given twice, or shards of different corpora, catalogs or shard counts.
+
+    \b
+    Example:
+      aeroexec report merge shard-*.json --check --format junit -o replay.xml
+
+    Exit codes: 0 merged (with --check: no differences); 1 with --check, some replay
+    differs; 2 a recording could not be read, or the shards could not be merged.
+    """
+    results = merge_shards([read_shard(path) for path in shards])
+    if output_format is OutputFormat.json:
+        text = replay_json(results)
+    elif output_format is OutputFormat.junit:
+        text = replay_junit(results)
+    else:
+        text = replay_text(results)
+    if output is not None:
+        _write(output, text + "\n")
+    elif text:
+        typer.echo(text)
+    for result in results:
+        if result.error is not None:
+            error_line(f"{result.recording}: error: {result.error}")
+    if any(r.error is not None for r in results):
+        raise typer.Exit(2)
+    if check and not all(r.equal for r in results):
+        raise typer.Exit(1)
