@@ -26,16 +26,17 @@ Workloads:
          the work LAND -> GO_TO_POINT does in (a)), so 4,614 distinct behaviors take
          turns and almost every activation touches cold memory.
 
-Targets (design.md section 10): (a) >= 50,000 activations/s; activation cost (b) / (a)
-<= 1.25x. The target ratio is (b1): it isolates the catalog's size, which is what the
-design bounds ("answers come from indexes ... never from scanning the catalog"). (b2)
-is printed beside it against the same figure: its extra cost is the CPU caches missing
-on a working set 770 times larger, not work that grows with the catalog.
+Targets (issue 17): (a) >= 50,000 activations/s; the activation cost of the walk (b2)
+<= 1.1x that of (a): the hard case, every activation a behavior of another group, so the
+catalog's size shows in everything an activation touches (indexes, cold memory), not
+only in the lookups of six warm behaviors. (b1) is printed beside it for scale. (An
+activation here is the coordinator's service alone; benchmarks/recording.py measures
+it with the executive step that follows it in a session.)
 
-All three are measured in one run, in interleaved rounds; each figure is the best
-round, in CPU time of the process (the wall-clock figure is printed beside it: on a
-shared machine the wall clock also counts other processes' time slices). Exits 1 when
-a target is missed.
+All three are measured in one run, in interleaved rounds; each figure is the median
+round, in CPU time of the process (on a shared machine the wall clock also counts other
+processes' time slices). Prints one line per figure (figure, baseline, ratio, target);
+exits 1 when a target is missed.
 
     .venv/bin/python benchmarks/activation.py [--activations 12000] [--repeat 10] [--profile]
 """
@@ -53,12 +54,14 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
+from figures import Figure
+
 from aeroexec.catalog import DEFAULT_CATALOG, Catalog, load_catalog, parse_catalog
 from aeroexec.executive import Executive, GenericBehavior
 from aeroexec.vehicles.null import NullVehicle
 
 RATE_TARGET = 50_000.0
-RATIO_TARGET = 1.25
+RATIO_TARGET = 1.1
 LARGE_BEHAVIORS = 10_000
 
 #: The cycle: (behavior, arguments); each preempts the one before it.
@@ -225,11 +228,11 @@ def measure(activations: int, repeat: int) -> dict[str, Any]:
         "large_load_s": load_s,
     }
     for key in workloads:
-        result[f"{key}_rate"] = activations / min(cpu[key])
-        result[f"{key}_wall_rate"] = activations / min(wall[key])
+        result[f"{key}_cpu"] = statistics.median(cpu[key])
+        result[f"{key}_rate"] = activations / statistics.median(cpu[key])
+        result[f"{key}_wall_rate"] = activations / statistics.median(wall[key])
         if key != "default":
-            result[f"{key}_ratio"] = min(cpu[key]) / min(cpu["default"])
-            result[f"{key}_median_ratio"] = statistics.median(
+            result[f"{key}_ratio"] = statistics.median(
                 x / d for x, d in zip(cpu[key], cpu["default"], strict=True)
             )
     return result
@@ -259,63 +262,43 @@ def main(argv: list[str] | None = None) -> int:
         print(profile(args.activations, large=False))
         print(profile(args.activations, large=True))
     m = measure(args.activations, args.repeat)
-    rate_ok = m["default_rate"] >= RATE_TARGET
-    ratio_ok = m["same_ratio"] <= RATIO_TARGET
     print(
         f"activation benchmark: {args.repeat} interleaved rounds of {args.activations:,} "
-        "activations per workload, recording off, NullVehicle, no behavior library"
-    )
-    print(
+        "activations per workload, recording off, NullVehicle, no behavior library; "
         f"large catalog: {m['large_behaviors']:,} behaviors, {m['large_lists']:,} lists, "
-        f"{m['large_capabilities']:,} capabilities (parsed in {m['large_load_s']:.2f} s)"
+        f"{m['large_capabilities']:,} capabilities (parsed in {m['large_load_s']:.2f} s); "
+        "CPU time, median round (shared machine)"
     )
-    print(
-        "figures: best round, CPU time of this process (wall clock in parentheses; the two "
-        "differ when the machine is shared)"
-    )
-
-    def rate(key: str) -> str:
-        return f"{m[key + '_rate']:,.0f}/s ({m[key + '_wall_rate']:,.0f}/s)"
-
-    def ratio(key: str) -> str:
-        return f"{m[key + '_ratio']:.3f}x (median {m[key + '_median_ratio']:.3f}x)"
-
-    walk_status = "ok" if m["walk_ratio"] <= RATIO_TARGET else "over"
-    large = f"{m['large_behaviors']:,}"
-    rows = [
-        ("measure", "figure", "target", "status"),
-        (
-            f"(a) activations/s, default catalog ({m['small_behaviors']} behaviors)",
-            rate("default"),
-            f">= {RATE_TARGET:,.0f}/s",
-            "ok" if rate_ok else "MISSED",
+    small = f"{m['small_behaviors']}-behavior catalog"
+    large = f"{m['large_behaviors']:,}-behavior catalog"
+    figures = [
+        Figure(
+            f"(a) activations/s, {small}",
+            m["default_rate"],
+            m["walk_rate"],
+            f"(b2) {large} walk",
+            RATE_TARGET,
+            unit="/s",
+            kind="min",
         ),
-        (f"(b1) activations/s, {large}-behavior catalog, same six", rate("same"), "", ""),
-        (
-            f"(b2) activations/s, {large}-behavior catalog, walk {m['groups']} groups",
-            rate("walk"),
-            "",
-            "",
+        Figure(
+            f"(b2) activation cost, {large}, walk over all {m['groups']} groups",
+            m["walk_cpu"],
+            m["default_cpu"],
+            f"(a) {small}",
+            RATIO_TARGET,
         ),
-        (
-            f"cost ratio {large} / {m['small_behaviors']} behaviors (b1 / a)",
-            ratio("same"),
-            f"<= {RATIO_TARGET:.2f}x",
-            "ok" if ratio_ok else "MISSED",
-        ),
-        (
-            "  same, every activation a cold behavior (b2 / a)",
-            ratio("walk"),
-            f"(<= {RATIO_TARGET:.2f}x)",
-            f"({walk_status})",
+        Figure(
+            f"(b1) activation cost, {large}, the same six behaviors (for scale)",
+            m["same_cpu"],
+            m["default_cpu"],
+            f"(a) {small}",
+            RATIO_TARGET,
         ),
     ]
-    widths = [max(len(r[i]) for r in rows) for i in range(4)]
-    for i, row in enumerate(rows):
-        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip())
-        if i == 0:
-            print("  ".join("-" * w for w in widths))
-    return 0 if rate_ok and ratio_ok else 1
+    for figure in figures:
+        print(figure.line())
+    return 0 if figures[0].ok and figures[1].ok else 1
 
 
 if __name__ == "__main__":

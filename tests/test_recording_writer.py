@@ -374,15 +374,33 @@ def test_flush_after_100_messages(tmp_path: Path) -> None:
 def test_flush_after_half_a_second_of_clock_time(tmp_path: Path) -> None:
     path = tmp_path / "time.mcap"
     recorder = Recorder(path)
-    state = {"position": [0, 0, 0], "velocity": [0, 0, 0], "yaw": 0.0, "battery": 1.0}
+    state = {"velocity": [0, 0, 0], "yaw": 0.0, "battery": 1.0}
     # 0.0 .. 0.4 s: span 0.4 s, 11 messages (state + transform, and the scene at 0.0)
     for tick in range(5):
-        recorder.on_topic(TopicRecord("vehicle/state", {**state, "flying": False}, tick * 10**8))
+        moving = {**state, "position": [tick, 0, 0], "flying": False}
+        recorder.on_topic(TopicRecord("vehicle/state", moving, tick * 10**8))
     assert _readable_messages(path) == 0
-    recorder.on_topic(TopicRecord("vehicle/state", {**state, "flying": True}, 5 * 10**8))
+    moved = {**state, "position": [5, 0, 0], "flying": True}
+    recorder.on_topic(TopicRecord("vehicle/state", moved, 5 * 10**8))
     assert _readable_messages(path) == 12  # the state at 0.5 s is flushed; its transform follows
     recorder.close()
     assert _readable_messages(path) == 13
+
+
+def test_transform_only_when_the_pose_changed(tmp_path: Path) -> None:
+    # Foxglove holds the latest transform: a vehicle that did not move needs no new one.
+    path = tmp_path / "still.mcap"
+    poses = [([0, 0, 1], 0.0), ([0, 0, 1], 0.0), ([0, 0, 1], 0.5), ([0, 0, 1], 0.5)]
+    poses += [([1, 0, 1], 0.5), ([1, 0, 1], 0.5)]
+    with Recorder(path) as recorder:
+        for tick, (position, yaw) in enumerate(poses):
+            state = {"position": position, "velocity": [0, 0, 0], "yaw": yaw, "battery": 1.0}
+            recorder.on_topic(TopicRecord("vehicle/state", state, tick * 10**8))
+    decoded = _by_topic(path)
+    assert len(decoded["/drone1/vehicle/state"]) == 6
+    transforms = decoded["/drone1/vehicle/transform"]
+    assert [t["timestamp"]["nsec"] for t in transforms] == [0, 2 * 10**8, 4 * 10**8]
+    assert [t["translation"]["x"] for t in transforms] == [0, 0, 1]
 
 
 def test_header_metadata_and_attachments_are_on_disk_before_any_message(tmp_path: Path) -> None:

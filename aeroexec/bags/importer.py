@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import heapq
 import os
+from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -49,6 +51,12 @@ VEHICLE = "ros1-bag"
 BAG_METADATA = "ros1_bag"
 MAPPING_ATTACHMENT = "bag_mapping.yaml"
 _NS = 1_000_000_000
+#: `advance(n)`: n more bag messages were imported.
+Advance = Callable[[int], None]
+#: `progress(bag name, bag messages)` -> a context manager yielding `advance`.
+ProgressFactory = Callable[[str, int], AbstractContextManager[Advance]]
+#: Progress is reported every this many bag messages.
+PROGRESS_EVERY = 1000
 #: Kinds of which only the latest message before a vehicle state matters.
 _LATEST_ONLY = frozenset({Kind.VELOCITY, Kind.BATTERY, Kind.FLIGHT_STATUS})
 _BEHAVIOR_KINDS = frozenset(
@@ -227,7 +235,7 @@ class _Import:
         return topics
 
     # -- the pass ----------------------------------------------------------------------------
-    def run(self) -> None:
+    def run(self, advance: Advance | None = None) -> None:
         for connection in self.bag.connections:  # every connection, even without messages
             self.sink.raw_channel(connection)
         recon = self.recon
@@ -237,7 +245,11 @@ class _Import:
         reconstructing = self.reconstructing
         decide_after = 2 * recon.grace  # an input is decided once this much later is read
         direct = True  # nothing held: a message may be written as it comes
+        count = 0
         for connection, time_ns, data in self.bag.messages():
+            count += 1
+            if advance is not None and count % PROGRESS_EVERY == 0:
+                advance(PROGRESS_EVERY)
             if reconstructing:
                 horizon = recon.horizon
                 if horizon is not None and horizon < time_ns - decide_after:
@@ -261,6 +273,8 @@ class _Import:
         recon.finish()
         self._take_reconstruction()
         self.out.release(None)
+        if advance is not None:
+            advance(count % PROGRESS_EVERY)
 
     def _take_reconstruction(self) -> None:
         for output in self.recon.take():
@@ -459,11 +473,13 @@ def import_bag(
     mapping: Mapping | str | os.PathLike[str] | None = None,
     drone: str | None = None,
     compression: str = "lz4",
+    progress: ProgressFactory | None = None,
 ) -> ImportReport:
     """Import `bag_path` into the MCAP file `output` (see the module docstring).
     `mapping`: a `Mapping`, a mapping file, or None for the shipped Aerostack one;
-    `drone`: the namespace (default: the mapping's). `RecordingError` (one line) when the
-    bag, the mapping or the output cannot be used; then no output file is left."""
+    `drone`: the namespace (default: the mapping's); `progress(name, messages)`: told the
+    bag messages as they are imported (a progress bar). `RecordingError` (one line) when
+    the bag, the mapping or the output cannot be used; then no output file is left."""
     if compression not in COMPRESSIONS:
         raise ValueError(f"compression must be one of {COMPRESSIONS}")
     if not isinstance(mapping, Mapping):
@@ -484,7 +500,9 @@ def import_bag(
                 _metadata(bag, mapping, drone, run.mapped),
                 {MAPPING_ATTACHMENT: mapping.text.encode("utf-8")},
             )
-            run.run()
+            bar = progress(Path(bag.name).name, bag.message_count) if progress else None
+            with bar if bar is not None else nullcontext(None) as advance:
+                run.run(advance)
             sink.finish()
             stream.flush()  # a full disk is an error here, inside the block
         stats = run.recon.stats

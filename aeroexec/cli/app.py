@@ -1,24 +1,118 @@
 """The typer application object and the helpers every command shares.
 
 Commands live in their own modules (`cli/<name>_cmd.py`) and register on `app`; they
-stay thin: parse, call the library, format, set the exit code.
+stay thin: parse, call the library, format, set the exit code. `app` imports a command's
+module only when that command is used (`LazyGroup`, with the table in `commands.py`), so
+`aeroexec --version` does not pay for the verifier, the bag reader or the MAVLink dialect.
 """
 
 from __future__ import annotations
 
 import functools
+import importlib
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping, MutableMapping
 from typing import Any, TypeVar
 
 import typer
+import typer.core
+import typer.main
 
 from aeroexec import __version__
+from aeroexec.cli.commands import COMMANDS
 from aeroexec.errors import AeroexecError, OutputLost
 from aeroexec.interrupts import Interrupted, signals_as_interrupts
 from aeroexec.interrupts import check as check_interrupts
 
+
+class _LazyCommands(MutableMapping[str, Any]):
+    """The group's commands: every name of `COMMANDS` from the start, each built (its
+    module imported) the first time it is looked up."""
+
+    def __init__(self, built: Mapping[str, Any], load: Callable[[str], Any]) -> None:
+        self._built: dict[str, Any] = dict(built)
+        self._load = load
+
+    def __getitem__(self, name: str) -> Any:
+        command = self._built.get(name)
+        if command is None:
+            command = self._load(name) if name in COMMANDS else None
+            if command is None:
+                raise KeyError(name)
+            self._built[name] = command
+        return command
+
+    def __setitem__(self, name: str, command: Any) -> None:
+        self._built[name] = command
+
+    def __delitem__(self, name: str) -> None:
+        del self._built[name]
+
+    def __iter__(self) -> Iterator[str]:
+        yield from COMMANDS
+        yield from (name for name in self._built if name not in COMMANDS)
+
+    def __len__(self) -> int:
+        return len(COMMANDS) + sum(1 for name in self._built if name not in COMMANDS)
+
+    def __contains__(self, name: object) -> bool:
+        return name in COMMANDS or name in self._built
+
+    def built(self, name: str) -> Any | None:
+        return self._built.get(name)
+
+
+def _load_command(name: str) -> Any | None:
+    """Import the module of command `name` (it registers on `app`) and build it."""
+    importlib.import_module(f"aeroexec.cli.{COMMANDS[name].module}")
+    for info in app.registered_commands:
+        callback_name = info.callback.__name__ if info.callback else ""
+        if (info.name or typer.main.get_command_name(callback_name)) == name:
+            return typer.main.get_command_from_info(
+                info,
+                pretty_exceptions_short=app.pretty_exceptions_short,
+                rich_markup_mode=app.rich_markup_mode,
+            )
+    for group_info in app.registered_groups:
+        if group_info.name == name:
+            return typer.main.get_group_from_info(
+                group_info,
+                pretty_exceptions_short=app.pretty_exceptions_short,
+                rich_markup_mode=app.rich_markup_mode,
+                suggest_commands=app.suggest_commands,
+            )
+    return None
+
+
+class LazyGroup(typer.core.TyperGroup):
+    """The root group: commands load on first use; `--help` lists them from the table."""
+
+    def __init__(self, *, commands: Mapping[str, Any] | None = None, **attrs: Any) -> None:
+        super().__init__(**attrs)
+        self.commands = _LazyCommands(commands or {}, _load_command)
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        return list(self.commands)
+
+    def format_commands(self, ctx: Any, formatter: Any) -> None:
+        commands = self.commands
+        assert isinstance(commands, _LazyCommands)
+        names = list(commands)
+        limit = formatter.width - 6 - max(len(name) for name in names)
+        rows = []
+        for name in names:
+            command = commands.built(name)
+            if command is None:  # not loaded: its summary, shortened as click would
+                command = typer.core.TyperCommand(name=name, help=COMMANDS[name].summary)
+            if not command.hidden:
+                rows.append((name, command.get_short_help_str(limit)))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
 app = typer.Typer(
+    cls=LazyGroup,
     name="aeroexec",
     help=(
         "Behavior management for a drone's executive layer (after the 2017 Aerostack "

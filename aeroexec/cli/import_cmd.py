@@ -10,6 +10,7 @@ import typer
 
 from aeroexec.bags.importer import import_bag
 from aeroexec.cli.app import app, guarded
+from aeroexec.viz.progress import progress_bar
 
 
 class ImportFormat(str, Enum):
@@ -79,7 +80,14 @@ def import_(
     Exit codes: 0 written; 2 the bag or the mapping could not be read, or OUT not
     written (one line on stderr; no partial file is left).
     """
-    report = import_bag(bag, output, mapping=mapping, drone=drone, compression=compression.value)
+    report = import_bag(
+        bag,
+        output,
+        mapping=mapping,
+        drone=drone,
+        compression=compression.value,
+        progress=lambda name, total: progress_bar(f"importing {name}", total),
+    )
     if output_format is ImportFormat.json:
         typer.echo(json.dumps(report.as_dict(), indent=2))
     else:

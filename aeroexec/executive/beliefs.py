@@ -221,6 +221,8 @@ class Beliefs:
         self._facts: dict[tuple[Any, ...], Compound] = {}
         self._on_change = on_change
         self.multivalued = multivalued
+        #: Counts changes (every add and remove): equal counts, equal contents.
+        self.version = 0
 
     def __iter__(self) -> Iterator[Compound]:
         return iter(self._facts.values())
@@ -280,5 +282,6 @@ class Beliefs:
         return self.query(query)[0]
 
     def _notify(self, op: str, fact: Compound) -> None:
+        self.version += 1
         if self._on_change is not None:
             self._on_change(op, render(fact))

@@ -91,6 +91,9 @@ class Executive:
         from aeroexec.vehicles.beliefs_feed import update_beliefs
 
         self._update_beliefs = update_beliefs
+        #: (vehicle state, belief store version) after the last feed: fed again with the
+        #: same state and untouched beliefs, the feed would change nothing.
+        self._fed: tuple[Any, int] | None = None
         self.events: list[BehaviorEvent] = []
         self._event_listeners: list[Callable[[BehaviorEvent], None]] = []
         self.specialist = BehaviorSpecialist(catalog, self.bus)
@@ -145,11 +148,17 @@ class Executive:
         check_interrupts()
         if self.time_limit_ns is not None and self.clock.now_ns() >= self.time_limit_ns:
             raise TimeLimitReached(self.time_limit_ns)
-        self.clock.advance()
-        self.vehicle.step(self.clock.tick_ns / NS_PER_S)
+        clock = self.clock
+        clock.advance()
+        self.vehicle.step(clock.tick_ns / NS_PER_S)
         self._feed_beliefs()
-        for behavior in [self.coordinator.active[n] for n in self.active_behaviors]:
+        active = self.coordinator.active
+        if len(active) == 1:  # the common case: no catalog order to sort by
+            (behavior,) = active.values()
             behavior.tick()
+        elif active:
+            for behavior in [active[n] for n in self.active_behaviors]:
+                behavior.tick()
         if self.bus.observed:
             self.bus.publish("vehicle/state", self._vehicle_state)
 
@@ -190,7 +199,13 @@ class Executive:
         self.bus.publish("beliefs", lambda: {"op": op, "belief": belief})
 
     def _feed_beliefs(self) -> None:
-        self._update_beliefs(self.beliefs, self.vehicle.state())
+        state = self.vehicle.state()
+        fed = self._fed
+        beliefs = self.beliefs
+        if fed is not None and fed[1] == beliefs.version and (fed[0] is state or fed[0] == state):
+            return
+        self._update_beliefs(beliefs, state)
+        self._fed = (state, beliefs.version)
 
     def _vehicle_state(self) -> dict[str, Any]:
         state = self.vehicle.state()

@@ -1,8 +1,9 @@
 """Messages for Foxglove's and Lichtblick's own panels, derived from what the executive
 records: the 3D panel's frame tree and scene, and a call log for the Log panel.
 
-* `vehicle/transform` (`foxglove.FrameTransform`): `world` -> `<drone>/base_link`, one per
-  `vehicle/state`: the vehicle's position and yaw as the 3D panel's frame tree.
+* `vehicle/transform` (`foxglove.FrameTransform`): `world` -> `<drone>/base_link`, with
+  each `vehicle/state` whose pose changed: the vehicle's position and yaw as the 3D
+  panel's frame tree.
 * `scene` (`foxglove.SceneUpdate`): once, with the first vehicle state: the vehicle's body
   (a box with a heading arrow, locked to its frame, so it flies with the transforms), and,
   when the session has a world, its visual markers and the object to follow. A moving

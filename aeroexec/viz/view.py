@@ -28,7 +28,7 @@ import rerun as rr
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.outputs import Pipe, whole_file_or_none
 from aeroexec.recording.reader import Recording, open_recording
-from aeroexec.recording.schemas import PROFILE
+from aeroexec.recording.schemas import MESSAGE_ENCODING, PROFILE
 from aeroexec.viz.blueprint import build_blueprint
 from aeroexec.viz.columns import ColumnWriter
 from aeroexec.viz.convert import PROGRESS_EVERY, ConvertStats, SessionConverter, session_origin_ns
@@ -242,7 +242,14 @@ def _convert(
     converter = SessionConverter(
         stream, writer, layout, origin_ns=session_origin_ns(recording), world=world, color=color
     )
-    with progress(source.name, survey.message_count) as advance:
+    # The bar counts what the pass decodes: the JSON messages (an imported bag's raw
+    # ros1 channels are read past, not converted).
+    decoded = sum(
+        count
+        for cid, count in survey.counts.items()
+        if cid in survey.channels and survey.channels[cid].message_encoding == MESSAGE_ENCODING
+    )
+    with progress(source.name, decoded) as advance:
         count = 0
         for record in recording.records():
             converter.feed(record)
