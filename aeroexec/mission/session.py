@@ -27,8 +27,8 @@ from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.plugins.discovery import STAND_IN, BehaviorSet, standard_set
-from aeroexec.plugins.manifest import METADATA_NAME as CODE_RECORD
 from aeroexec.plugins.manifest import code_manifest
+from aeroexec.recording.schemas import CODE_METADATA_NAME as CODE_RECORD
 from aeroexec.vehicles.base import Vehicle, VehicleState
 from aeroexec.vehicles.sim import SimVehicle
 

@@ -15,11 +15,9 @@ from typing import Any
 
 from aeroexec.recording.damage import Damage
 from aeroexec.recording.reader import ChannelInfo, RawMessage, RecordedAttachment, Recording
+from aeroexec.recording.schemas import CODE_METADATA_NAME as CODE_RECORD
 from aeroexec.recording.schemas import MESSAGE_ENCODING
 
-#: The metadata record saying which code implemented each behavior (see
-#: `aeroexec.plugins.manifest`; named here so reading a recording imports no plugin code).
-CODE_RECORD = "behaviors"
 #: The metadata record `aeroexec recover` adds to a copy of a damaged file.
 RECOVER_METADATA_NAME = "aeroexec_recover"
 

@@ -35,6 +35,9 @@ from typing import Any
 PROFILE = "aeroexec"
 SCHEMA_ENCODING = "jsonschema"
 MESSAGE_ENCODING = "json"
+#: The metadata record saying which code implemented each behavior
+#: (`aeroexec.plugins.manifest` writes it; readers need no plugin code to read it).
+CODE_METADATA_NAME = "behaviors"
 
 SERVICE_CALL = "aeroexec.ServiceCall"
 BEHAVIOR_EVENT = "aeroexec.BehaviorEvent"

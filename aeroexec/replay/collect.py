@@ -20,7 +20,7 @@ from typing import Any
 
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
-from aeroexec.plugins.manifest import METADATA_NAME as CODE_RECORD
+from aeroexec.recording.schemas import CODE_METADATA_NAME as CODE_RECORD
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.replay.outcome import (
     ACTIVATIONS,

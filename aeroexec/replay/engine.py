@@ -12,6 +12,7 @@ report says so.
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 from dataclasses import dataclass, field, replace
@@ -150,21 +151,11 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     mode = choose_mode(run, options.mode)
     catalog = choose_catalog(run, options.catalog)
     behaviors = choose_behaviors(run, catalog, options.behaviors)
-    mission = load_mission(options.mission) if options.mission is not None else None
-    if mode is Mode.closed and is_live(run):
+    if mode is Mode.closed:
+        mission = load_mission(options.mission) if options.mission is not None else None
         # A live flight cannot be flown again: its recorded vehicle stands in for it.
-        replayed, how = replay_live(
-            path,
-            run,
-            catalog,
-            behaviors,
-            options.output,
-            horizon,
-            mission=mission,
-            trust_recording=options.trust_recording,
-        )
-    elif mode is Mode.closed:
-        replayed, how = replay_closed(
+        closed_loop = functools.partial(replay_live, path) if is_live(run) else replay_closed
+        replayed, how = closed_loop(
             run,
             catalog,
             behaviors,

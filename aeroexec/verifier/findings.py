@@ -171,6 +171,23 @@ class Finding:
         )
 
     @classmethod
+    def in_file(
+        cls,
+        file: str,
+        rule: str,
+        severity: Severity,
+        message: str,
+        mark: Mark,
+        subjects: Iterable[str] = (),
+        witness: Witness | None = None,
+    ) -> Finding:
+        """`at`, placed in `file` when the mark names none (a catalog parsed from memory
+        carries marks without a file: its findings still belong to its source)."""
+        if not mark.file or mark.file == "<memory>":
+            mark = Mark(file, mark.line, mark.column)
+        return cls.at(rule, severity, message, mark, subjects, witness)
+
+    @classmethod
     def from_diagnostic(cls, diagnostic: Diagnostic) -> Finding:
         return cls.at(
             diagnostic.code,

@@ -128,9 +128,7 @@ class CatalogGraphs:
         subjects: Iterable[str] = (),
         witness: Witness | None = None,
     ) -> Finding:
-        if not mark.file or mark.file == "<memory>":
-            mark = Mark(self.file, mark.line, mark.column)
-        return Finding.at(rule, severity, message, mark, subjects, witness)
+        return Finding.in_file(self.file, rule, severity, message, mark, subjects, witness)
 
     @property
     def top_mark(self) -> Mark:

@@ -42,9 +42,7 @@ class TaskContext:
         subjects: Iterable[str] = (),
         witness: Witness | None = None,
     ) -> Finding:
-        if not mark.file or mark.file == "<memory>":
-            mark = Mark(self.file, mark.line, mark.column)
-        return Finding.at(rule, severity, message, mark, subjects, witness)
+        return Finding.in_file(self.file, rule, severity, message, mark, subjects, witness)
 
     @cached_property
     def known_tasks(self) -> Suggester:
