@@ -61,6 +61,11 @@ class _Discard(io.TextIOBase):
         return len(text)
 
 
+def mission_prints_discarded() -> contextlib.redirect_stdout[io.TextIOBase]:
+    """The block a replayed mission runs in: its prints go nowhere."""
+    return contextlib.redirect_stdout(_Discard())
+
+
 def _seed(metadata: dict[str, str], notes: list[str]) -> int:
     try:
         return int(metadata.get("seed", "0"))
@@ -146,7 +151,7 @@ def replay_closed(
             drone=drone,
             behaviors=behaviors,
         )
-        with contextlib.redirect_stdout(_Discard()):
+        with mission_prints_discarded():
             result = simulate(
                 config,
                 [observer],

@@ -21,8 +21,6 @@ link is stopped at the same tick here; the commands the flight's ending issued a
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from collections.abc import Generator, Iterator
 from pathlib import Path
@@ -34,7 +32,7 @@ from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionScript, run_script
 from aeroexec.mission.session import session_code, session_observers, stand_in_metadata
 from aeroexec.plugins.discovery import BehaviorSet
-from aeroexec.replay.closedloop import ChosenCatalog, script_to_run
+from aeroexec.replay.closedloop import ChosenCatalog, mission_prints_discarded, script_to_run
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -114,13 +112,6 @@ def _ticks(path: str | Path) -> Generator[int, None, None]:
         yield message.log_time_ns
 
 
-class _Discard(io.TextIOBase):
-    """Where a replayed mission's prints go (the report says what matters)."""
-
-    def write(self, text: str) -> int:
-        return len(text)
-
-
 def replay_live(
     path: str | Path,
     run: RecordedRun,
@@ -182,7 +173,7 @@ def replay_live(
             player = CommandPlayer(executive)
             player.play(recorded.commands, until_ns=recorded.end_ns)
         else:
-            with contextlib.redirect_stdout(_Discard()):
+            with mission_prints_discarded():
                 try:
                     result = run_script(script, MissionAPI(executive))
                     if not result.returned:
