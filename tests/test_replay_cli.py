@@ -172,7 +172,7 @@ def test_globs_and_out_dir(flights: Path, work: Path) -> None:
     code, out, _ = cli(
         "replay",
         str(flights / "[as]*.mcap"),
-        "--out-dir",
+        "--output-dir",
         str(out_dir),
         "--check",
         "--trust-recording",
@@ -296,7 +296,7 @@ def test_bad_catalog(flights: Path, work: Path) -> None:
 @pytest.mark.parametrize(
     ("extra", "needle"),
     [
-        (["-o", "x.mcap", "--out-dir", "d"], "not both"),
+        (["-o", "x.mcap", "--output-dir", "d"], "not both"),
         (["--tolerance", "-1"], "non-negative"),
     ],
 )
@@ -333,7 +333,7 @@ def test_a_directory_with_a_ros1_bag(flights: Path, work: Path) -> None:
     out_dir = work / "mixed-replays"
     code, out, err = cli(
         "replay", str(mixed), "--catalog", str(DEFAULT_CATALOG_FILE), "--check", "--format", "json",
-        "--out-dir", str(out_dir),
+        "--output-dir", str(out_dir),
     )  # fmt: skip
     assert code == 0, err
     recordings = json.loads(out)["recordings"]
