@@ -17,6 +17,7 @@ from typing import Any, TypeVar
 import typer
 import typer.core
 import typer.main
+from typer._click.core import Command as ClickCommand
 from typer._click.shell_completion import CompletionItem
 
 from aeroexec import __version__
@@ -120,9 +121,8 @@ class LazyGroup(Group):
             for name, entry in COMMANDS.items()
             if name.startswith(incomplete)
         ]
-        return names + [
-            item for item in super().shell_complete(ctx, incomplete) if item.value not in COMMANDS
-        ]
+        # The group's own options, but not typer's command listing (it builds them all).
+        return names + ClickCommand.shell_complete(self, ctx, incomplete)
 
 
 app = Typer(
