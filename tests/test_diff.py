@@ -96,7 +96,8 @@ def test_alignment_reports_commands_in_only_one_run() -> None:
     ]
     assert result.compared == 3
     assert [d.message for d in result.differences] == [
-        "#1 GO_TO_POINT COORDINATES=[2, 0, 1] now has arguments COORDINATES=[5, 0, 1] (was COORDINATES=[2, 0, 1])",
+        "#1 GO_TO_POINT COORDINATES=[2, 0, 1] now has arguments COORDINATES=[5, 0, 1] "
+        "(was COORDINATES=[2, 0, 1])",
         "#2 GO_TO_POINT COORDINATES=[3, 0, 1] only in A: the mission took another path",
         "#3 KEEP_HOVERING only in B: the mission took another path",
     ]
@@ -229,7 +230,8 @@ def test_diff_text(pair: tuple[Path, Path, Path]) -> None:
     assert code == 1
     assert out.splitlines() == [
         f"{base} -> {narrow}: 2 differences (9 commands compared)",
-        "  #4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 numbers "
+        "  #4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: "
+        "COORDINATES needs 3 numbers "
         "in [-2, 2], got [3, 5.5, 1.3] (3 is outside)",
         "  #6 GO_TO_POINT coordinates=[0, 0, 1.41] now ends GOAL_ACHIEVED after 0.1 s (was 5.3 s; "
         "tolerance 0.5 s)",

@@ -189,7 +189,8 @@ def test_results_are_the_same_in_any_executor_order(corpus: Corpus) -> None:
         (
             ["s3://bucket/flights/"],
             ["fsspec"],
-            "aeroexec replay: error: recordings named by URL need fsspec: pip install 'aeroexec[ray]'",
+            "aeroexec replay: error: recordings named by URL need fsspec: pip install "
+            "'aeroexec[ray]'",
         ),
     ],
 )

@@ -265,7 +265,8 @@ def test_merge_refuses_what_is_not_one_whole_run(
         return one_error_line(err)
 
     assert refused(thirds[0], thirds[2]) == (
-        "aeroexec report merge: error: shard(s) 2 of 3 missing: the merged report would not be whole"
+        "aeroexec report merge: error: shard(s) 2 of 3 missing: the merged report would "
+        "not be whole"
     )
     assert refused(*thirds, thirds[1]) == (
         f"{thirds[1]}: error: shard 2/3 given twice (also {thirds[1]})"

@@ -151,7 +151,8 @@ def test_no_tcp_server_exits_2_naming_the_refusal(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["fly", mission, "--connect", url, "--connect-timeout", "0.6"])
     assert result.exit_code == 2
     assert result.output.strip().splitlines()[-1] == (
-        f"aeroexec fly: error: no connection to tcp:127.0.0.1:{port} within 0.6 s (Connection refused)"
+        f"aeroexec fly: error: no connection to tcp:127.0.0.1:{port} within 0.6 s "
+        f"(Connection refused)"
     )
 
 

@@ -83,7 +83,8 @@ def test_check_fails_on_differences(flights: Path, narrowed: Path) -> None:
     code, out, _ = cli("replay", str(flights), "--catalog", str(narrowed), "--check")
     assert code == 1
     assert (
-        "  #4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 numbers "
+        "  #4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: "
+        "COORDINATES needs 3 numbers "
         "in [-2, 2], got [3, 5.5, 1.3] (3 is outside)\n" in out
     )
     assert out.strip().endswith("3 recordings: 2 with differences, 1 without, 0 unreadable")

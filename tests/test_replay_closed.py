@@ -124,7 +124,10 @@ def test_new_incompatibility_preempts(recs: dict[str, Path], work: Path) -> None
         "#1 activate PAY_ATTENTION_TO_VISUAL_MARKERS now ends INTERRUPTED after 0.0 s, "
         "preempted by GO_TO_POINT (was inhibited after 13.3 s)"
     )
-    assert text[1] == "#2 GO_TO_POINT relative_coordinates=[0, 0, 0.5] now preempts PAY_ATTENTION_TO_VISUAL_MARKERS"
+    assert text[1] == (
+        "#2 GO_TO_POINT relative_coordinates=[0, 0, 0.5] now preempts "
+        "PAY_ATTENTION_TO_VISUAL_MARKERS"
+    )
     assert text[2].endswith("capabilities: now releases VISUAL_MARKERS_RECOGNITION")
     assert text[3].endswith("processes: now stops droneArucoEyeROSModule")
     assert text[4] == (
@@ -197,7 +200,8 @@ def test_a_shorter_hover_timeout_in_a_mission_with_beliefs(
     result = replay(recs["watch"], short)
     assert kinds(result) == [(7, "end_event")]
     assert messages(result) == [
-        "#7 KEEP_HOVERING duration=3 now ends TIME_OUT after 2.0 s (was GOAL_ACHIEVED after 3.0 s): "
+        "#7 KEEP_HOVERING duration=3 now ends TIME_OUT after 2.0 s (was GOAL_ACHIEVED "
+        "after 3.0 s): "
         "no result within 2 s"
     ]
 
@@ -207,7 +211,8 @@ def test_commands_only_in_the_recording(recs: dict[str, Path], work: Path) -> No
     result = replay(recs["survey"], catalog_for(work, "narrowed"))
     assert kinds(result) == [(4, "accepted"), (5, "only_in_base"), (None, "final_state")]
     assert messages(result)[1] == (
-        "#5 GO_TO_POINT coordinates=[0, 0, 1.2] only in the recording: the mission took another path"
+        "#5 GO_TO_POINT coordinates=[0, 0, 1.2] only in the recording: the mission took "
+        "another path"
     )
     assert result.diff is not None
     assert result.diff.compared == 6
@@ -220,7 +225,9 @@ def test_commands_only_in_the_replay(work: Path) -> None:
     assert kinds(result) == [(4, "accepted"), (5, "only_in_new"), (None, "final_state")]
     text = messages(result)
     assert text[0].startswith("#4 GO_TO_POINT coordinates=[4, 4, 1.2] now accepted (was rejected: ")
-    assert text[1] == "#5 GO_TO_POINT coordinates=[0, 0, 1.2] only in the replay: the mission took another path"
+    assert text[1] == (
+        "#5 GO_TO_POINT coordinates=[0, 0, 1.2] only in the replay: the mission took another path"
+    )
     assert result.diff is not None
     assert result.diff.differences[1].new_index == 5
     assert result.diff.differences[1].base_index is None
