@@ -121,7 +121,8 @@ def test_killed_aeroexec_run_record_is_recoverable(tmp_path: Path, kill_after: i
     mission.write_text(LOOP_MISSION.format(limit=10**6))
     broken = tmp_path / "flight.mcap"
     lines = _kill_after(
-        [sys.executable, "-m", "aeroexec", "run", str(mission), "-q", "--output", str(broken)],
+        # Not -q: the mission's own "done N" lines say how far it got.
+        [sys.executable, "-m", "aeroexec", "run", str(mission), "--output", str(broken)],
         tmp_path,
         lambda line: line == f"done {kill_after}",
     )
