@@ -384,6 +384,9 @@ def test_a_wrong_command_line_is_one_line_and_exit_2(path: str) -> None:
         token for p in options(command) if p.required for token in (long_name(p), "x")
     ]
     for param in options(command):
+        if not is_flag(param):  # given last, without its value
+            line = _one_error_line([*words, long_name(param)], path)
+            assert f"option '{long_name(param)}' requires an argument" in line
         for bad in _bad_values(param):
             args = [*words, *arguments, *required_options, long_name(param), bad]
             line = _one_error_line(args, path)

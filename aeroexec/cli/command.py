@@ -187,10 +187,24 @@ def usage_error_line(exc: click_errors.ClickException) -> str:
     return f"{who}: error: {usage_message(exc)}{hint}"
 
 
+def _parse(parse: Any, ctx: Context, args: list[str]) -> list[str]:
+    """click's parser raises some errors (an option without its value) without saying
+    whose command line it was reading: tell them, so the line names the command."""
+    try:
+        return parse(ctx, args)  # type: ignore[no-any-return]
+    except click_errors.UsageError as exc:
+        if exc.ctx is None:
+            exc.ctx, exc.cmd = ctx, ctx.command
+        raise
+
+
 class Command(typer.core.TyperCommand):
     """One aeroexec command (every `@app.command` is one)."""
 
     context_class = AeroContext
+
+    def parse_args(self, ctx: Context, args: list[str]) -> list[str]:
+        return _parse(super().parse_args, ctx, args)
 
     def collect_usage_pieces(self, ctx: Context) -> list[str]:
         pieces = [self.options_metavar] if self.options_metavar else []
@@ -225,7 +239,7 @@ class Group(typer.core.TyperGroup):
         if not args and self.no_args_is_help and not ctx.resilient_parsing:
             typer.echo(ctx.get_help(), color=ctx.color)
             ctx.exit(0)
-        return super().parse_args(ctx, args)
+        return _parse(super().parse_args, ctx, args)
 
     def main(
         self,
