@@ -43,14 +43,14 @@ def output_dir_option(help: str) -> Any:
     return typer.Option(None, "--output-dir", metavar="DIR", help=help, show_default=False)
 
 
-def deprecated_option(*names: str, instead: str) -> Any:
+def deprecated_option(*names: str, instead: str, metavar: str = "FILE") -> Any:
     """An old spelling kept working for existing scripts: hidden from the help, listed
     under "Deprecated spellings" in docs/cli.md, announced on stderr when used."""
     return typer.Option(
         None,
         *names,
         hidden=True,
-        metavar="FILE" if instead.endswith("--output") else "DIR",
+        metavar=metavar,
         help=f"Deprecated spelling of {instead}.",
         show_default=False,
     )

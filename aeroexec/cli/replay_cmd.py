@@ -137,7 +137,7 @@ def replay(
     ] = None,
     output: str | None = output_option("Record the replay to this MCAP file (one REC)."),
     output_dir: str | None = output_dir_option("Record each replay to DIR/<REC stem>.mcap."),
-    out_dir: str | None = deprecated_option("--out-dir", instead="--output-dir"),
+    out_dir: str | None = deprecated_option("--out-dir", instead="--output-dir", metavar="DIR"),
     check: Annotated[
         bool,
         typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
