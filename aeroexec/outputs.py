@@ -4,13 +4,13 @@
         write(temp)                  # any exception, or a signal, removes `temp`
     # here fixed.mcap is complete (renamed into place)
 
-Commands whose output is only useful complete (`recover`, `import`, `view --save`) write
+Commands whose output is only useful complete (`recover`, `import`, `view -o`) write
 to a hidden temporary name beside the target and rename it into place at the end. On a
 failure (a full disk, a damaged input) or a signal (`Interrupted`), the temporary file is
 removed, the target is left as it was, and an `Interrupted` is told so for its one line.
 The temporary file is created like any other file (mode 0666 less the umask).
 
-`aeroexec run --record` and `replay -o` do not use this: a recording is useful up to
+`aeroexec run -o` and `replay -o` do not use this: a recording is useful up to
 its last flush, so they write in place and keep what they can (see `Recorder`).
 """
 

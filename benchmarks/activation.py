@@ -1,4 +1,6 @@
-"""Benchmark: activations per second through the executive's whole path (design.md s.10).
+"""Benchmark: activations per second through the executive's whole path.
+
+Targets: docs/design.md#performance-targets.
 
 Every activation goes through the full coordinator path -- argument format check,
 situation, consistency with the active set, capability feasibility, preemption of the

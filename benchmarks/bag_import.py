@@ -1,4 +1,6 @@
-"""Benchmark: `aeroexec import` of ROS 1 bags vs rosbags reading them (design.md section 10).
+"""Benchmark: `aeroexec import` of ROS 1 bags vs rosbags reading them.
+
+Targets: docs/design.md#performance-targets.
 
 For each bag: the time of `aeroexec.bags.import_bag` (read every message, copy it raw to
 the MCAP output, decode only the mapped topics, derive and write the aeroexec channels)

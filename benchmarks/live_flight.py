@@ -1,6 +1,6 @@
 """Benchmark: the thesis' Appendix C flown live, on ArduCopter SITL and on `aeroexec mavsim`.
 
-Runs `aeroexec fly missions/appendix_c.py --record` against
+Runs `aeroexec fly missions/appendix_c.py --output` against
 
 * ArduCopter 4.5.6 SITL (`../shared/sitl/arducopter`, or `$AEROEXEC_SITL`), a fresh one
   per run, at `--speedup` (default 1: real time, as a real vehicle flies), over UDP;
@@ -110,7 +110,7 @@ def ack_latencies(record: Path) -> list[float]:
 def fly(workdir: Path, url: str, name: str) -> tuple[subprocess.CompletedProcess[str], Path]:
     record = workdir / f"{name}.mcap"
     args = [sys.executable, "-m", "aeroexec", "fly", str(APPENDIX_C), "--connect", url]
-    args += ["--record", str(record), "--connect-timeout", "300", "-q"]
+    args += ["--output", str(record), "--connect-timeout", "300", "-q"]
     return subprocess.run(args, capture_output=True, text=True, timeout=900), record
 
 

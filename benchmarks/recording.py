@@ -7,7 +7,7 @@
     floor line beside it: `mcap` alone writing the very same records (bytes already
     encoded, read back from the recording) with its default chunking, added to the
     unrecorded run: no recorder built on mcap's Python writer can go below it.
-    Whole-process variant: `python -m aeroexec run MISSION [--record OUT]`, CPU of the
+    Whole-process variant: `python -m aeroexec run MISSION [--output OUT]`, CPU of the
     child, start-up included (what a user feels).
 (b) Activations through the whole path with recording on, vs the floor: `mcap` alone
     writing the same records (topics, log times, bytes as recorded, already encoded).
@@ -149,7 +149,7 @@ def mission_figures(workdir: Path, repeat: int, root: Path) -> list[Figure]:
                 "mcap": timed(lambda records=records, alone=alone: mcap_alone(alone, records)),
                 "process off": lambda python=python: child_cpu(python, str(root)),
                 "process on": lambda python=python, whole_out=whole_out: child_cpu(
-                    [*python, "--record", str(whole_out)], str(root)
+                    [*python, "--output", str(whole_out)], str(root)
                 ),
             },
             repeat,
@@ -171,7 +171,7 @@ def mission_figures(workdir: Path, repeat: int, root: Path) -> list[Figure]:
                 MISSION_TARGET,
             ),
             Figure(
-                f"    whole process: aeroexec run --record ({name})",
+                f"    whole process: aeroexec run --output ({name})",
                 medians["process on"],
                 medians["process off"],
                 "aeroexec run",

@@ -14,8 +14,8 @@ Each is replayed with its own catalog, closed loop and open loop, measuring
   the original, replaying it, diffing the two: what `aeroexec replay --check` does);
 * peak memory (tracemalloc, in separate runs so it does not slow the timed ones).
 
-Targets (design.md section 10): replay >= 1000x real time; memory flat in recording
-size: the peak for hover-60 <= 1.10x the peak for patrol-10 (same commands, 6x the
+Targets (docs/design.md#performance-targets): replay >= 1000x real time; memory flat
+in recording size: the peak for hover-60 <= 1.10x the peak for patrol-10 (same commands, 6x the
 length). Replay keeps one small summary per mission command, by design; patrol-60 vs
 hover-60 shows that cost per command (reported, no target). Prints every figure with
 its target; exits 1 if a target is missed.

@@ -6,7 +6,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import pytest
 from test_bags_support import (
     AEROSTACK_BAG,
     NS,
@@ -88,8 +87,7 @@ def test_drone_namespace_selects_topics_and_names_channels(tmp_path: Path) -> No
     assert not any(t.startswith("/drone1/") for t in topics)
 
 
-@pytest.mark.parametrize("flag", ["--mapping", "-m"])
-def test_cli_mapping_and_drone_options(tmp_path: Path, flag: str) -> None:
+def test_cli_mapping_and_drone_options(tmp_path: Path) -> None:
     custom = tmp_path / "turtle.yaml"
     custom.write_text('state_period_s: 0.5\ntopics:\n  - {topic: "/turtle2/pose", kind: pose}\n')
     result = CliRunner().invoke(
@@ -99,7 +97,7 @@ def test_cli_mapping_and_drone_options(tmp_path: Path, flag: str) -> None:
             str(TURTLE_LZ4),
             "-o",
             str(tmp_path / "t.mcap"),
-            flag,
+            "--mapping",
             str(custom),
             "--drone",
             "t2",

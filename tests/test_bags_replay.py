@@ -96,7 +96,7 @@ def test_a_shorter_timeout_ends_the_flight_early(folder: Path, bag: Path) -> Non
         (
             2,
             "end_event",
-            "#2 activate GO_TO_POINT [1, 2, 1] now ends TIME_OUT after 2.0 s "
+            "#2 activate GO_TO_POINT coordinates=[1, 2, 1] now ends TIME_OUT after 2.0 s "
             "(was GOAL_ACHIEVED after 3.6 s): no result within 2 s",
         )
     ]

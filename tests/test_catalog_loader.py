@@ -1,8 +1,8 @@
 """The catalog loader: the thesis' Appendix A catalog, tag classes, dialects, marks.
 
-Expected values come from the thesis text (Appendix A, section 3.3.1) and design.md
-section 3, not from the loader; positions are found by searching the YAML text, so a
-wrong `file:line:col` fails here.
+Expected values come from the thesis text (Appendix A, section 3.3.1) and
+docs/design.md#catalogs, not from the loader; positions are found by searching the YAML
+text, so a wrong `file:line:col` fails here.
 """
 
 from __future__ import annotations

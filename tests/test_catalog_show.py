@@ -209,7 +209,10 @@ def test_bad_format_option_is_a_usage_error() -> None:
 def test_missing_file_argument_is_a_usage_error() -> None:
     result = runner.invoke(app, ["catalog", "show"])
     assert result.exit_code == 2
-    assert "FILE" in result.stderr
+    assert result.stderr == (
+        "aeroexec catalog show: error: missing argument CATALOG "
+        "(aeroexec catalog show -h for help)\n"
+    )
 
 
 # -- help ---------------------------------------------------------------------------------
@@ -226,8 +229,9 @@ def test_help_explains_with_examples() -> None:
     assert "Examples:" in text
     # The example lines survive help re-wrapping intact (one per line).
     assert "\n    aeroexec catalog show catalog/aerostack-2017.yaml\n" in text
-    assert "--format json" in text and "--format" in text
+    assert "-f json" in text and "--format" in text
     assert "file:line:col" in text
+    assert "`aeroexec verify CATALOG` is the check" in " ".join(text.split())
 
 
 # -- text output --------------------------------------------------------------------------
@@ -278,7 +282,12 @@ def test_text_details(thesis_catalog: Catalog) -> None:
 def test_text_ends_with_the_loader_diagnostics(thesis_catalog: Catalog) -> None:
     out = render_plain(thesis_catalog)
     path = str(THESIS_CATALOG)
-    tail = out.split("\ndiagnostics (0 errors, 2 warnings, ")[1].splitlines()[1:]
+    before, after = out.split("\nloader diagnostics (0 errors, 2 warnings, ")
+    # Saying what the diagnostics are not: the verifier's rules.
+    assert before.endswith(
+        f"\n`aeroexec verify {path}` is the check: references, conflicts, start order, missions"
+    )
+    tail = after.splitlines()[1:]
     assert tail == [str(d) for d in sorted(thesis_catalog.diagnostics, key=lambda d: d.mark.line)]
     assert (
         f"{path}:137:5: warning AX102 capability SELF_LOCALIZATION_BY_VISUAL_MARKERS: "
@@ -447,18 +456,50 @@ def test_json_has_no_nan_or_infinity(tmp_path: Path) -> None:
 # -- the terminal view --------------------------------------------------------------------
 
 
-def test_rich_tables(thesis_catalog: Catalog) -> None:
-    console = Console(record=True, force_terminal=True, width=220, color_system="standard")
-    render_rich(thesis_catalog, console)
+def _terminal(catalog: Catalog, width: int) -> tuple[str, str]:
+    console = Console(record=True, force_terminal=True, width=width, color_system="standard")
+    render_rich(catalog, console)
     raw = console.export_text(styles=True)
-    plain = ANSI.sub("", raw)
-    for title in ("Behaviors", "Lists", "Capabilities", "Diagnostics (0 errors, 2 warnings"):
+    return raw, ANSI.sub("", raw)
+
+
+def test_the_terminal_view(thesis_catalog: Catalog) -> None:
+    raw, plain = _terminal(thesis_catalog, 120)
+    for title in ("Behaviors (12)", "Lists (2)", "Capabilities (6)", "Loader diagnostics"):
         assert title in plain
-    for name in [*thesis_catalog.behaviors, *thesis_catalog.capabilities]:
-        assert name in plain
-    assert "┃ Behavior" in plain  # a table, not the plain listing
-    assert "3 numbers in [-100, 100]" in plain
+    lines = plain.splitlines()
+    assert "  GO_TO_POINT  timeout 120 s" in lines
+    assert "  PAY_ATTENTION  no timeout, recurrent" in lines
+    block = plain.split("\n  GO_TO_POINT  timeout 120 s\n")[1].split("\n  ROTATE ")[0]
+    assert [" ".join(line.split()) for line in block.splitlines()] == [
+        "incompatible motion_behaviors, rotation_behaviors (preempts 11)",
+        "capabilities SETPOINT_BASED_FLIGHT_CONTROL, PATH_PLANNING",
+        "COORDINATES 3 numbers in [-100, 100]",
+        "RELATIVE_COORDINATES 3 numbers in [-100, 100]",
+    ]
+    assert "  SELF_LOCALIZATION_BY_ODOMETRY  active by default" in lines
     assert "\x1b[33mwarning" in raw  # warnings in yellow
+    # Warnings are listed, infos counted; and what the loader's checks are not.
+    infos = sum(d.severity.value == "info" for d in thesis_catalog.diagnostics)
+    assert f"{infos} infos not listed here (--color never or -f json lists them)" in lines
+    assert " ".join(plain.split()).endswith(
+        f"`aeroexec verify {THESIS_CATALOG}` is the check: references, conflicts, start order, "
+        "missions"
+    )
+
+
+@pytest.mark.parametrize("catalog_file", [DEFAULT_CATALOG, THESIS_CATALOG])
+def test_the_terminal_view_fits_80_columns_without_splitting_a_name(catalog_file: Path) -> None:
+    catalog = load_catalog(catalog_file)
+    _, plain = _terminal(catalog, 80)
+    lines = plain.splitlines()
+    assert max(len(line) for line in lines) <= 80
+    assert len(lines) < 100  # the table layout took 262 lines for the default catalog
+    words = set(re.findall(r"[A-Za-z0-9_]+", plain))
+    names = [*catalog.behaviors, *catalog.lists, *catalog.capabilities]
+    names += [p for c in catalog.capabilities.values() for p in c.processes]
+    for name in names:
+        assert name in words, f"{name} is split or missing"
 
 
 def test_rich_prints_names_literally() -> None:
@@ -495,9 +536,14 @@ def test_terminal_gets_tables_and_a_pipe_gets_plain_text() -> None:
     assert process.wait(timeout=60) == 0
     os.close(leader)
     on_terminal = ANSI.sub("", b"".join(chunks).decode("utf-8", "replace"))
-    assert "┃ Behavior" in on_terminal
+    assert "\n  GO_TO_POINT  timeout 120 s" in on_terminal.replace("\r\n", "\n")
     piped = run_module("catalog", "show", str(THESIS_CATALOG)).stdout
-    assert "┃" not in piped and piped.startswith(f"catalog {THESIS_CATALOG}\n")
+    assert "\x1b[" not in piped and piped.startswith(f"catalog {THESIS_CATALOG}\n")
+    # --color decides it either way: always styles a pipe, never keeps a terminal plain.
+    styled = run_module("catalog", "show", str(THESIS_CATALOG), "--color", "always").stdout
+    assert "\x1b[" in styled and "\n  GO_TO_POINT  timeout 120 s" in ANSI.sub("", styled)
+    no_color = run_module("catalog", "show", str(THESIS_CATALOG), env={"NO_COLOR": "1"}).stdout
+    assert no_color == piped
 
 
 def test_show_uses_the_strict_loader(tmp_path: Path) -> None:

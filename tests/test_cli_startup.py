@@ -95,4 +95,4 @@ def test_every_command_module_registers_its_command() -> None:
 def test_unknown_command_is_suggested_without_loading_everything() -> None:
     result = CliRunner().invoke(app, ["verfy"])
     assert result.exit_code == 2
-    assert "Did you mean 'verify'" in result.output
+    assert "(did you mean 'verify'?)" in result.output

@@ -115,14 +115,14 @@ def test_command_line_wins_over_the_file_which_wins_over_defaults(
     )
     monkeypatch.chdir(tmp_path)
     rec = tmp_path / "a.mcap"
-    result = CliRunner().invoke(app, ["run", str(mission), "-r", str(rec), "-q"])
+    result = CliRunner().invoke(app, ["run", str(mission), "-o", str(rec), "-q"])
     assert result.exit_code == 0, result.output
     assert "vehicle landed at (5.00, 0.00, 0.00)" in result.output  # the project's world
     from aeroexec.recording import open_recording
 
     metadata = open_recording(rec).metadata["aeroexec"]
     assert metadata["seed"] == "3" and metadata["world"] == world.name
-    result = CliRunner().invoke(app, ["run", str(mission), "-r", str(rec), "-q", "--seed", "9"])
+    result = CliRunner().invoke(app, ["run", str(mission), "-o", str(rec), "-q", "--seed", "9"])
     assert result.exit_code == 0, result.output
     assert open_recording(rec).metadata["aeroexec"]["seed"] == "9"
 

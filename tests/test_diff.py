@@ -96,8 +96,9 @@ def test_alignment_reports_commands_in_only_one_run() -> None:
     ]
     assert result.compared == 3
     assert [d.message for d in result.differences] == [
-        "#1 GO_TO_POINT [2, 0, 1] now has arguments [5, 0, 1] (was [2, 0, 1])",
-        "#2 GO_TO_POINT [3, 0, 1] only in A: the mission took another path",
+        "#1 GO_TO_POINT COORDINATES=[2, 0, 1] now has arguments COORDINATES=[5, 0, 1] "
+        "(was COORDINATES=[2, 0, 1])",
+        "#2 GO_TO_POINT COORDINATES=[3, 0, 1] only in A: the mission took another path",
         "#3 KEEP_HOVERING only in B: the mission took another path",
     ]
 
@@ -119,7 +120,7 @@ def test_a_new_rejection_is_reported_alone() -> None:
     )
     result = diff_outcomes(base, new)
     assert [d.message for d in result.differences] == [
-        "#0 GO_TO_POINT [3, 0, 1] now rejected: too far"
+        "#0 GO_TO_POINT COORDINATES=[3, 0, 1] now rejected: too far"
     ]
 
 
@@ -190,9 +191,9 @@ def test_json_form() -> None:
     assert document["differences"] == [
         {
             "command": 0,
-            "label": "#0 GO_TO_POINT [1, 0, 1]",
+            "label": "#0 GO_TO_POINT COORDINATES=[1, 0, 1]",
             "kind": "end_time",
-            "message": "#0 GO_TO_POINT [1, 0, 1] now ends GOAL_ACHIEVED after 3.0 s "
+            "message": "#0 GO_TO_POINT COORDINATES=[1, 0, 1] now ends GOAL_ACHIEVED after 3.0 s "
             "(was 2.0 s; tolerance 0.5 s)",
             "base_index": 0,
             "new_index": 0,
@@ -229,9 +230,10 @@ def test_diff_text(pair: tuple[Path, Path, Path]) -> None:
     assert code == 1
     assert out.splitlines() == [
         f"{base} -> {narrow}: 2 differences (9 commands compared)",
-        "  #4 GO_TO_POINT [3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 numbers "
+        "  #4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: "
+        "COORDINATES needs 3 numbers "
         "in [-2, 2], got [3, 5.5, 1.3] (3 is outside)",
-        "  #6 GO_TO_POINT [0, 0, 1.41] now ends GOAL_ACHIEVED after 0.1 s (was 5.3 s; "
+        "  #6 GO_TO_POINT coordinates=[0, 0, 1.41] now ends GOAL_ACHIEVED after 0.1 s (was 5.3 s; "
         "tolerance 0.5 s)",
     ]
 

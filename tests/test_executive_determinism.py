@@ -1,4 +1,4 @@
-"""Determinism of the executive core (design.md section 2).
+"""Determinism of the executive core (docs/design.md#determinism).
 
 The same commands over the same catalog (and world and seed) give the same observed
 message stream, record for record: content, field order, log time, seq and parent_seq.

@@ -1,4 +1,4 @@
-"""Property tests of the executive core (design.md section 11).
+"""Property tests of the executive core (docs/design.md#invariants).
 
 Hypothesis drives random command sequences -- activate (catalog behaviors and unknown
 names, with valid, invalid and junk arguments), inhibit (active or not), step -- over

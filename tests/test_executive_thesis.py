@@ -2,10 +2,10 @@
 
 Fifteen component tests (4 behavior process, 4 coordinator, 4 specialist, 3 resource
 manager) and the four integration tests of its table (behaviors activated, behaviors
-stopped, belief manager integration, error management), plus the repairs design.md
-section 2 makes to the thesis: nothing half-done on a rejected activation, the
-zero-reference bug fixed, recurrent behaviors never time out, author exceptions never
-escape into the core.
+stopped, belief manager integration, error management), plus the repairs
+docs/design.md#the-repairs-of-the-thesis makes to the thesis: nothing half-done on a
+rejected activation, the zero-reference bug fixed, recurrent behaviors never time out,
+author exceptions never escape into the core.
 
 Everything runs on `NullVehicle` with behaviors that are either `GenericBehavior` (what
 the executive builds for a catalog behavior without an implementation) or the small
@@ -964,7 +964,7 @@ def test_integration_error_management(behavior: str, arguments: dict[str, Any], 
     assert journal.calls("on_start", behavior) == []
 
 
-# == design.md section 2: the repairs =====================================================
+# == docs/design.md#the-repairs-of-the-thesis ==========================================
 def test_rejected_preemptor_leaves_its_would_be_victim_running() -> None:
     """A rejected activation changes nothing, even when the new behavior would have
     preempted someone: the capability check is decided before any preemption, so the

@@ -142,7 +142,7 @@ def test_a_signal_stops_a_parallel_replay_and_its_workers(
     if signum == signal.SIGTERM:
         assert replay.returncode == 128 + signal.SIGTERM
         assert out == ""
-        assert err.strip().splitlines()[-1] == "aeroexec: interrupted by SIGTERM"
+        assert err.strip().splitlines()[-1] == "aeroexec replay: interrupted by SIGTERM"
     else:
         assert replay.returncode == -signal.SIGKILL
 
@@ -183,13 +183,14 @@ def test_results_are_the_same_in_any_executor_order(corpus: Corpus) -> None:
         (
             ["--executor", "ray"],
             ["ray"],
-            "aeroexec: error: --executor ray needs Ray (import of ray halted; None in "
+            "aeroexec replay: error: --executor ray needs Ray (import of ray halted; None in "
             "sys.modules): pip install 'aeroexec[ray]'",
         ),
         (
             ["s3://bucket/flights/"],
             ["fsspec"],
-            "aeroexec: error: recordings named by URL need fsspec: pip install 'aeroexec[ray]'",
+            "aeroexec replay: error: recordings named by URL need fsspec: pip install "
+            "'aeroexec[ray]'",
         ),
     ],
 )

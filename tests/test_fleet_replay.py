@@ -177,14 +177,14 @@ def test_a_shard_is_the_same_however_the_directory_is_spelled() -> None:
 def test_bad_shard_values(corpus: Corpus, value: str) -> None:
     code, _, err = cli("replay", str(corpus.files[0]), "--shard", value)
     assert code == 2
-    assert one_error_line(err).startswith("aeroexec: error: --shard: ")
+    assert one_error_line(err).startswith("aeroexec replay: error: --shard: ")
 
 
 def test_bad_executor_value(corpus: Corpus) -> None:
     code, _, err = cli("replay", str(corpus.files[0]), "--executor", "dask")
     assert code == 2
     assert one_error_line(err) == (
-        "aeroexec: error: --executor: expected local, ray or ray://HOST:PORT, got 'dask'"
+        "aeroexec replay: error: --executor: expected local, ray or ray://HOST:PORT, got 'dask'"
     )
 
 
@@ -265,7 +265,8 @@ def test_merge_refuses_what_is_not_one_whole_run(
         return one_error_line(err)
 
     assert refused(thirds[0], thirds[2]) == (
-        "aeroexec: error: shard(s) 2 of 3 missing: the merged report would not be whole"
+        "aeroexec report merge: error: shard(s) 2 of 3 missing: the merged report would "
+        "not be whole"
     )
     assert refused(*thirds, thirds[1]) == (
         f"{thirds[1]}: error: shard 2/3 given twice (also {thirds[1]})"

@@ -95,7 +95,7 @@ def test_on_exit_hold_leaves_it_holding_and_exits_1(tmp_path: Path) -> None:
     assert "ending: braked to hold in GUIDED" in result.output
     last = result.output.strip().splitlines()[-1]
     assert last.startswith(
-        "aeroexec: vehicle not landed: --on-exit hold left it flying; last seen flying at (1.0"
+        "aeroexec fly: vehicle not landed: --on-exit hold left it flying; last seen flying at (1.0"
     )
     assert last.endswith(" m in GUIDED, armed")
     assert final["mode"] == "GUIDED" and final["flying"] and final["armed"]
@@ -251,7 +251,7 @@ def test_sigterm_mid_flight_lands_finalizes_the_recording_and_exits_143(tmp_path
         "    api.executeBehavior('TAKE_OFF')\n"
         "    return api.executeBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n",
     )
-    args = ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--record", str(record)]
+    args = ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--output", str(record)]
     with mavsim(port) as sim:
         proc = subprocess.Popen(
             [sys.executable, "-m", "aeroexec", *args],
@@ -274,7 +274,7 @@ def test_sigterm_mid_flight_lands_finalizes_the_recording_and_exits_143(tmp_path
         final = sim.stats()["final"]
     assert proc.returncode == 143
     (line,) = err.strip().splitlines()
-    assert line.startswith("aeroexec: interrupted by SIGTERM; vehicle on the ground at (")
+    assert line.startswith("aeroexec fly: interrupted by SIGTERM; vehicle on the ground at (")
     assert line.endswith(f"in LAND, disarmed; recording finalized: {record}")
     assert final["mode"] == "LAND" and not final["armed"] and 0.5 < final["position"][1] < 29
     recording = open_recording(record)
@@ -314,7 +314,7 @@ def test_sigint_while_waiting_for_the_autopilot_exits_130_having_commanded_nothi
             proc.wait(5)
     assert proc.returncode == 130
     assert err.strip() == (
-        "aeroexec: interrupted by SIGINT; stopped before the autopilot was ready; "
+        "aeroexec fly: interrupted by SIGINT; stopped before the autopilot was ready; "
         "nothing was commanded"
     )
 

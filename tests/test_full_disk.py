@@ -57,7 +57,7 @@ def full_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_record_to_dev_full(tmp_path: Path) -> None:
     if not Path("/dev/full").exists():
         pytest.skip("no /dev/full here")
-    code, err = aeroexec("run", str(MISSION), "-q", "-r", "/dev/full", cwd=tmp_path)
+    code, err = aeroexec("run", str(MISSION), "-q", "-o", "/dev/full", cwd=tmp_path)
     assert code == 2
     assert (
         one_line(err) == "/dev/full: error: cannot write: No space left on device; nothing was kept"
@@ -70,7 +70,7 @@ def test_a_recording_that_fills_the_disk_keeps_its_last_flush(
 ) -> None:
     out = tmp_path / "cut.mcap"
     if command == "run":
-        args = ["run", str(MISSION), "-q", "-r", str(out)]
+        args = ["run", str(MISSION), "-q", "-o", str(out)]
     else:
         args = ["replay", str(full_run), "--mission", str(MISSION), "-o", str(out)]
     code, err = aeroexec(*args, cwd=tmp_path, limit=LIMIT)
@@ -103,7 +103,7 @@ def test_whole_file_outputs_are_removed_when_the_disk_fills(
         limit = 50_000
     else:
         out = tmp_path / "flight.rrd"
-        args = ["view", str(full_run), "--save", str(out)]
+        args = ["view", str(full_run), "--output", str(out)]
         limit = 20_000
     code, err = aeroexec(*args, cwd=tmp_path, limit=limit)
     assert code == 2, err

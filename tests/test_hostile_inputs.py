@@ -44,7 +44,7 @@ COMMANDS = {
     "replay recording": lambda f, out: ["replay", f],
     "replay catalog": lambda f, out: ["replay", str(MISSION), "-c", f],
     "diff recording": lambda f, out: ["diff", f, f],
-    "view recording": lambda f, out: ["view", f, "--save", out],
+    "view recording": lambda f, out: ["view", f, "--output", out],
     "import bag": lambda f, out: ["import", f, "-o", out],
     "import mapping": lambda f, out: ["import", str(BAG), "--mapping", f, "-o", out],
     "verify catalog": lambda f, out: ["verify", f],

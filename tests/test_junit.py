@@ -98,7 +98,8 @@ def test_a_malformed_source_date_epoch_is_an_error_for_junit_only(flights: Path)
     code, out, err = _cli("replay", str(flights / "a.mcap"), "--format", "junit", env=env)
     assert code == 2 and out == ""
     assert err == (
-        "aeroexec: error: SOURCE_DATE_EPOCH must be whole seconds since 1970, got 'yesterday'\n"
+        "aeroexec replay: error: SOURCE_DATE_EPOCH must be whole seconds since 1970, got "
+        "'yesterday'\n"
     )
     assert _cli("replay", str(flights / "a.mcap"), env=env)[0] == 0  # text needs no clock
 

@@ -158,8 +158,11 @@ def test_cli_writes_the_file_or_standard_output(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        ([], "aeroexec: error: choose the viewer the layout is for: --foxglove"),
-        (["--foxglove", "--drone", "a/b"], "aeroexec: error: --drone: a namespace is one name"),
+        ([], "aeroexec layout: error: choose the viewer the layout is for: --foxglove"),
+        (
+            ["--foxglove", "--drone", "a/b"],
+            "aeroexec layout: error: --drone: a namespace is one name",
+        ),
     ],
 )
 def test_cli_refuses_with_one_line(args: list[str], message: str) -> None:

@@ -129,6 +129,7 @@ def start_mavsim(procs: list[Proc], port: int, stats: Path, *extra: str) -> Proc
             "45",
             "--stats",
             str(stats),
+            "--stats-tail",
             *extra,
         ]
     )
@@ -159,7 +160,7 @@ def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
     record = tmp_path / "flight.mcap"
     stats_path = tmp_path / "mavsim.json"
     flight = Proc(
-        ["fly", str(APPENDIX_C), "--connect", f"udpin:127.0.0.1:{port}", "--record", str(record)]
+        ["fly", str(APPENDIX_C), "--connect", f"udpin:127.0.0.1:{port}", "--output", str(record)]
     )
     procs.append(flight)
     flight.wait_for("waiting for a heartbeat")  # bound: nothing mavsim sends is lost
@@ -423,7 +424,7 @@ def test_garbage_and_no_autopilot_exit_2_with_one_line(tmp_path: Path, procs: li
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
     assert lines[0].startswith(
-        f"aeroexec: error: no heartbeat from udpin:127.0.0.1:{port} within 1 s ("
+        f"aeroexec fly: error: no heartbeat from udpin:127.0.0.1:{port} within 1 s ("
     )
     # 40 random datagrams (each one rejection at least), the cut-off packet, and the
     # GCS heartbeat (a good packet, but no autopilot's) are all accounted for.
@@ -466,8 +467,8 @@ def test_a_signed_ground_station_ignores_an_unsigned_vehicle(tmp_path: Path) -> 
     [
         (["--connect", "tcp4:127.0.0.1:5760"], "unsupported connection 'tcp4:127.0.0.1:5760'"),
         (["--connect", "udpin:0.0.0.0:14550"], "is not a loopback address; pass --allow-remote"),
-        (["--failsafe", "panic"], "--failsafe must be one of land, hold, rtl"),
-        (["--on-exit", "panic"], "--on-exit must be one of land, hold, none"),
+        (["--failsafe", "panic"], "invalid value for --failsafe: 'panic' is not one of"),
+        (["--on-exit", "panic"], "invalid value for --on-exit: 'panic' is not one of"),
         (["--link-timeout", "-1"], "link timeout must be >= 0 seconds"),
         (["--heartbeat-timeout", "0"], "heartbeat timeout must be positive"),
         (["--signing-key", " "], "--signing-key: the signing key is empty"),
@@ -476,7 +477,7 @@ def test_a_signed_ground_station_ignores_an_unsigned_vehicle(tmp_path: Path) -> 
 def test_bad_fly_options_exit_2_with_one_line(args: list[str], message: str) -> None:
     result = CliRunner().invoke(app, ["fly", str(APPENDIX_C), *args])
     assert result.exit_code == 2
-    assert result.output.strip().splitlines() == [f"aeroexec: error: {message}"] or (
+    assert result.output.strip().splitlines() == [f"aeroexec fly: error: {message}"] or (
         message in result.output and len(result.output.strip().splitlines()) == 1
     )
 
@@ -497,7 +498,7 @@ def test_a_port_already_taken_exits_2_instead_of_sharing_it() -> None:
         )
     assert result.exit_code == 2
     assert result.output.strip() == (
-        f"aeroexec: error: cannot open udpin:127.0.0.1:{port}: Address already in use"
+        f"aeroexec fly: error: cannot open udpin:127.0.0.1:{port}: Address already in use"
     )
 
 

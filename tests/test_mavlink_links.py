@@ -151,7 +151,8 @@ def test_no_tcp_server_exits_2_naming_the_refusal(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["fly", mission, "--connect", url, "--connect-timeout", "0.6"])
     assert result.exit_code == 2
     assert result.output.strip().splitlines()[-1] == (
-        f"aeroexec: error: no connection to tcp:127.0.0.1:{port} within 0.6 s (Connection refused)"
+        f"aeroexec fly: error: no connection to tcp:127.0.0.1:{port} within 0.6 s "
+        f"(Connection refused)"
     )
 
 
@@ -208,7 +209,9 @@ def test_a_missing_serial_device_exits_2_with_one_line(tmp_path: Path) -> None:
     )
     assert result.exit_code == 2
     lines = result.output.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"aeroexec: error: cannot open {device},57600:")
+    assert len(lines) == 1 and lines[0].startswith(
+        f"aeroexec fly: error: cannot open {device},57600:"
+    )
     assert "No such file or directory" in lines[0]
 
 

@@ -101,10 +101,25 @@ def null_api() -> MissionAPI:
 
 def test_execute_behavior_of_a_recurrent_behavior_is_refused_at_once() -> None:
     api = null_api()
-    with pytest.raises(MissionError, match="PAY_ATTENTION is recurrent and would never return"):
+    with pytest.raises(MissionError) as refused:
         api.execute_behavior("PAY_ATTENTION")
+    assert str(refused.value) == (
+        "execute_behavior('PAY_ATTENTION'): PAY_ATTENTION is recurrent and would never "
+        "return; use activate_behavior and inhibit_behavior"
+    )
     assert api.executive.active_behaviors == ()
     assert api.executive.now_s == 0.0
+    # A mission in the thesis' spelling is told in its own spelling.
+    with pytest.raises(MissionError) as camel:
+        api.executeBehavior("PAY_ATTENTION")
+    assert str(camel.value) == (
+        "executeBehavior('PAY_ATTENTION'): PAY_ATTENTION is recurrent and would never "
+        "return; use activateBehavior and inhibitBehavior"
+    )
+    with pytest.raises(MissionError, match=r"^consultBelief: "):
+        api.consultBelief("flying(")
+    with pytest.raises(MissionError, match=r"^consult_belief: "):
+        api.consult_belief("flying(")
 
 
 def test_refused_execution_returns_error_and_says_why() -> None:
@@ -209,7 +224,10 @@ def test_run_exit_1_for_executing_a_recurrent_behavior(tmp_path: Path) -> None:
     )
     result = runner.invoke(app, ["run", str(path)])
     assert result.exit_code == 1
-    assert "is recurrent and would never return" in result.output
+    assert (
+        "is recurrent and would never return; use activateBehavior and inhibitBehavior"
+        in result.stderr
+    )
 
 
 @pytest.mark.parametrize(

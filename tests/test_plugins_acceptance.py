@@ -133,7 +133,7 @@ def differences(report: str) -> list[str]:
 
 def test_a_configured_package_runs_replays_and_its_change_is_reported(tmp_path: Path) -> None:
     project = make_project(tmp_path / "project")
-    run = aeroexec(project, "run", "mission.py", "--record", "base.mcap")
+    run = aeroexec(project, "run", "mission.py", "--output", "base.mcap")
     assert run.returncode == 0, run.stderr
     assert run.stderr == ""
     assert "] end      SURVEY GOAL_ACHIEVED" in run.stdout
@@ -153,7 +153,7 @@ def test_a_configured_package_runs_replays_and_its_change_is_reported(tmp_path: 
     # The same project elsewhere with a tighter tolerance: the replay reports exactly
     # what a fresh run of it changes, and which code changed.
     tighter = make_project(tmp_path / "tighter", tolerance="0.005")
-    fresh = aeroexec(tighter, "run", "mission.py", "--record", "fresh.mcap", "-q")
+    fresh = aeroexec(tighter, "run", "mission.py", "--output", "fresh.mcap", "-q")
     assert fresh.returncode == 0, fresh.stderr
     expected = aeroexec(tighter, "diff", str(project / "base.mcap"), "fresh.mcap")
     replayed = aeroexec(
@@ -187,7 +187,7 @@ def test_the_configured_package_flies_against_mavsim(tmp_path: Path, procs: list
             "mission.py",
             "--connect",
             f"udpin:127.0.0.1:{port}",
-            "--record",
+            "--output",
             "live.mcap",
         ],
         cwd=project,

@@ -119,7 +119,7 @@ def invoke(*args: str) -> tuple[int, str, str]:
 
 
 def test_a_catalog_behavior_without_code_is_refused_with_names_and_places(project: Path) -> None:
-    code, out, err = invoke("run", "mission.py", "-r", "out.mcap")
+    code, out, err = invoke("run", "mission.py", "-o", "out.mcap")
     assert code == 2
     (line,) = err.strip().splitlines()
     row = SURVEY_CATALOG.splitlines().index("  - behavior: INSPECT") + 1
@@ -130,7 +130,7 @@ def test_a_catalog_behavior_without_code_is_refused_with_names_and_places(projec
 
 
 def test_allowed_stand_ins_are_announced_once_and_marked_in_the_recording(project: Path) -> None:
-    code, out, err = invoke("run", "mission.py", "-r", "out.mcap", "--allow-unimplemented")
+    code, out, err = invoke("run", "mission.py", "-o", "out.mcap", "--allow-unimplemented")
     assert code == 0, err
     assert err.splitlines() == [
         "warning: INSPECT has no implementation: a stand-in (GenericBehavior) ends it with "
@@ -161,7 +161,7 @@ def test_recordings_say_which_code_ran_and_are_the_same_bytes_from_any_folder(
     shutil.copytree(project, copy)
     for root in (project, copy):
         monkeypatch.chdir(root)
-        code, _, err = invoke("run", "mission.py", "-r", "out.mcap", "-q")
+        code, _, err = invoke("run", "mission.py", "-o", "out.mcap", "-q")
         assert code == 0, err
     first = (project / "out.mcap").read_bytes()
     assert first == (copy / "out.mcap").read_bytes()
@@ -177,7 +177,7 @@ def test_recordings_say_which_code_ran_and_are_the_same_bytes_from_any_folder(
 def test_replay_with_changed_code_reports_it_beside_the_differences(project: Path) -> None:
     write(project / "c.yaml", COMPLETE_CATALOG)
     write(project / "mission.py", COMPLETE_MISSION)
-    code, _, err = invoke("run", "mission.py", "-r", "base.mcap", "-q")
+    code, _, err = invoke("run", "mission.py", "-o", "base.mcap", "-q")
     assert code == 0, err
     code, out, err = invoke("replay", "base.mcap", "--check")
     assert code == 0, out + err
@@ -270,7 +270,7 @@ def test_the_mission_directory_is_importable_only_while_it_runs(tmp_path: Path) 
 def test_replay_refuses_a_behavior_whose_code_is_gone(project: Path) -> None:
     write(project / "c.yaml", COMPLETE_CATALOG)
     write(project / "mission.py", COMPLETE_MISSION)
-    assert invoke("run", "mission.py", "-r", "base.mcap", "-q")[0] == 0
+    assert invoke("run", "mission.py", "-o", "base.mcap", "-q")[0] == 0
     write(project / "pyproject.toml", "[tool.aeroexec]\nbehaviors = []\n")
     code, out, err = invoke("replay", "base.mcap")
     assert code == 2, out
@@ -279,13 +279,13 @@ def test_replay_refuses_a_behavior_whose_code_is_gone(project: Path) -> None:
     code, out, err = invoke("replay", "base.mcap", "-b", "no_behaviors_here.py")
     assert code == 2
     assert err.strip() == (
-        "aeroexec: error: --behaviors no_behaviors_here.py: no such file or directory: "
+        "aeroexec replay: error: --behaviors no_behaviors_here.py: no such file or directory: "
         "no_behaviors_here.py"
     )
 
 
 def test_fly_refuses_before_the_link_opens(project: Path) -> None:
-    code, out, err = invoke("fly", "mission.py", "--connect", "udpin:127.0.0.1:9", "-r", "x.mcap")
+    code, out, err = invoke("fly", "mission.py", "--connect", "udpin:127.0.0.1:9", "-o", "x.mcap")
     assert code == 2
     assert "error: no implementation for INSPECT" in err and len(err.strip().splitlines()) == 1
     assert "waiting for a heartbeat" not in out and not (project / "x.mcap").exists()

@@ -1,7 +1,7 @@
 """Crash safety: a recording process killed with SIGKILL loses at most the flush bound
 (100 messages / 0.5 s of clock time); `recover` returns everything before it.
 
-Two kinds of victims, each killed at several points: `aeroexec run --record` on a
+Two kinds of victims, each killed at several points: `aeroexec run --output` on a
 looping mission, and a small driver (tests/fixtures/recording/drive_executive.py) that
 prints exactly how many messages it has handed to the recorder.
 """
@@ -121,7 +121,8 @@ def test_killed_aeroexec_run_record_is_recoverable(tmp_path: Path, kill_after: i
     mission.write_text(LOOP_MISSION.format(limit=10**6))
     broken = tmp_path / "flight.mcap"
     lines = _kill_after(
-        [sys.executable, "-m", "aeroexec", "run", str(mission), "-q", "--record", str(broken)],
+        # Not -q: the mission's own "done N" lines say how far it got.
+        [sys.executable, "-m", "aeroexec", "run", str(mission), "--output", str(broken)],
         tmp_path,
         lambda line: line == f"done {kill_after}",
     )
@@ -151,7 +152,7 @@ def test_killed_aeroexec_run_record_is_recoverable(tmp_path: Path, kill_after: i
             "run",
             str(reference_mission),
             "-q",
-            "--record",
+            "--output",
             str(reference),
         ],
         cwd=tmp_path,

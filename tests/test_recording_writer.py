@@ -345,7 +345,7 @@ def test_separate_processes_with_different_hash_seeds_are_byte_identical(tmp_pat
         out = tmp_path / f"run{hash_seed}.mcap"
         env = {**os.environ, "PYTHONHASHSEED": hash_seed}
         subprocess.run(
-            [sys.executable, "-m", "aeroexec", "run", str(APPENDIX_C), "-q", "--record", str(out)],
+            [sys.executable, "-m", "aeroexec", "run", str(APPENDIX_C), "-q", "--output", str(out)],
             check=True,
             capture_output=True,
             env=env,

@@ -83,7 +83,8 @@ def test_check_fails_on_differences(flights: Path, narrowed: Path) -> None:
     code, out, _ = cli("replay", str(flights), "--catalog", str(narrowed), "--check")
     assert code == 1
     assert (
-        "  #4 GO_TO_POINT [3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 numbers "
+        "  #4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: "
+        "COORDINATES needs 3 numbers "
         "in [-2, 2], got [3, 5.5, 1.3] (3 is outside)\n" in out
     )
     assert out.strip().endswith("3 recordings: 2 with differences, 1 without, 0 unreadable")
@@ -120,7 +121,7 @@ def test_junit_has_one_testcase_per_recording(flights: Path, narrowed: Path) -> 
     failure = appendix.find("failure")
     assert failure is not None
     assert failure.get("message") == "2 differences"
-    assert "#4 GO_TO_POINT [3, 5.5, 1.3] now rejected" in (failure.text or "")
+    assert "#4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected" in (failure.text or "")
     survey_failure = survey.find("failure")
     assert survey_failure is not None
     assert "only in the recording: the mission took another path" in (survey_failure.text or "")
@@ -140,7 +141,7 @@ def test_json_is_one_object_with_equal_and_differences(flights: Path, narrowed: 
     ]
     first = document["differences"][0]
     assert first["recording"] == str(flights / "appendix_c.mcap")
-    assert first["message"].startswith("#4 GO_TO_POINT [3, 5.5, 1.3] now rejected: ")
+    assert first["message"].startswith("#4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: ")
     assert document["recordings"][0]["mode"] == "closed"
 
 
@@ -172,7 +173,7 @@ def test_globs_and_out_dir(flights: Path, work: Path) -> None:
     code, out, _ = cli(
         "replay",
         str(flights / "[as]*.mcap"),
-        "--out-dir",
+        "--output-dir",
         str(out_dir),
         "--check",
         "--trust-recording",
@@ -296,7 +297,7 @@ def test_bad_catalog(flights: Path, work: Path) -> None:
 @pytest.mark.parametrize(
     ("extra", "needle"),
     [
-        (["-o", "x.mcap", "--out-dir", "d"], "not both"),
+        (["-o", "x.mcap", "--output-dir", "d"], "not both"),
         (["--tolerance", "-1"], "non-negative"),
     ],
 )
@@ -333,7 +334,7 @@ def test_a_directory_with_a_ros1_bag(flights: Path, work: Path) -> None:
     out_dir = work / "mixed-replays"
     code, out, err = cli(
         "replay", str(mixed), "--catalog", str(DEFAULT_CATALOG_FILE), "--check", "--format", "json",
-        "--out-dir", str(out_dir),
+        "--output-dir", str(out_dir),
     )  # fmt: skip
     assert code == 0, err
     recordings = json.loads(out)["recordings"]

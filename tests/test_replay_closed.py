@@ -101,12 +101,12 @@ def test_narrowed_argument_range_rejects(recs: dict[str, Path], work: Path) -> N
     result = replay(recs["appendix_c"], catalog_for(work, "narrowed"))
     assert kinds(result) == [(4, "accepted"), (6, "end_time")]
     assert messages(result)[0] == (
-        "#4 GO_TO_POINT [3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 "
+        "#4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 "
         "numbers in [-2, 2], got [3, 5.5, 1.3] (3 is outside)"
     )
     # The way home is now short: the drone never left.
     assert messages(result)[1].startswith(
-        "#6 GO_TO_POINT [0, 0, 1.41] now ends GOAL_ACHIEVED after 0.1 s (was 5.3 s;"
+        "#6 GO_TO_POINT coordinates=[0, 0, 1.41] now ends GOAL_ACHIEVED after 0.1 s (was 5.3 s;"
     )
 
 
@@ -124,7 +124,10 @@ def test_new_incompatibility_preempts(recs: dict[str, Path], work: Path) -> None
         "#1 activate PAY_ATTENTION_TO_VISUAL_MARKERS now ends INTERRUPTED after 0.0 s, "
         "preempted by GO_TO_POINT (was inhibited after 13.3 s)"
     )
-    assert text[1] == "#2 GO_TO_POINT [0, 0, 0.5] now preempts PAY_ATTENTION_TO_VISUAL_MARKERS"
+    assert text[1] == (
+        "#2 GO_TO_POINT relative_coordinates=[0, 0, 0.5] now preempts "
+        "PAY_ATTENTION_TO_VISUAL_MARKERS"
+    )
     assert text[2].endswith("capabilities: now releases VISUAL_MARKERS_RECOGNITION")
     assert text[3].endswith("processes: now stops droneArucoEyeROSModule")
     assert text[4] == (
@@ -146,7 +149,7 @@ def test_shortened_timeout_times_out(recs: dict[str, Path], work: Path) -> None:
     result = replay(recs["appendix_c"], catalog_for(work, "timeout"))
     assert kinds(result) == [(4, "end_event"), (6, "end_event"), (None, "final_state")]
     assert messages(result)[0] == (
-        "#4 GO_TO_POINT [3, 5.5, 1.3] now ends TIME_OUT after 3.0 s "
+        "#4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now ends TIME_OUT after 3.0 s "
         "(was GOAL_ACHIEVED after 5.3 s): no result within 3 s"
     )
     # Cut short twice, the drone lands away from home.
@@ -156,7 +159,7 @@ def test_shortened_timeout_times_out(recs: dict[str, Path], work: Path) -> None:
 def test_removed_behavior_is_unknown(recs: dict[str, Path], work: Path) -> None:
     result = replay(recs["appendix_c"], catalog_for(work, "removed"))
     assert kinds(result) == [(5, "accepted")]
-    assert messages(result) == ["#5 ROTATE -90 now rejected: unknown behavior ROTATE"]
+    assert messages(result) == ["#5 ROTATE angle=-90 now rejected: unknown behavior ROTATE"]
 
 
 def test_a_rejection_for_another_reason(recs: dict[str, Path], work: Path) -> None:
@@ -197,7 +200,8 @@ def test_a_shorter_hover_timeout_in_a_mission_with_beliefs(
     result = replay(recs["watch"], short)
     assert kinds(result) == [(7, "end_event")]
     assert messages(result) == [
-        "#7 KEEP_HOVERING 3 now ends TIME_OUT after 2.0 s (was GOAL_ACHIEVED after 3.0 s): "
+        "#7 KEEP_HOVERING duration=3 now ends TIME_OUT after 2.0 s (was GOAL_ACHIEVED "
+        "after 3.0 s): "
         "no result within 2 s"
     ]
 
@@ -207,7 +211,8 @@ def test_commands_only_in_the_recording(recs: dict[str, Path], work: Path) -> No
     result = replay(recs["survey"], catalog_for(work, "narrowed"))
     assert kinds(result) == [(4, "accepted"), (5, "only_in_base"), (None, "final_state")]
     assert messages(result)[1] == (
-        "#5 GO_TO_POINT [0, 0, 1.2] only in the recording: the mission took another path"
+        "#5 GO_TO_POINT coordinates=[0, 0, 1.2] only in the recording: the mission took "
+        "another path"
     )
     assert result.diff is not None
     assert result.diff.compared == 6
@@ -219,8 +224,10 @@ def test_commands_only_in_the_replay(work: Path) -> None:
     result = replay(path, edited_catalog(work, "default_copy"))
     assert kinds(result) == [(4, "accepted"), (5, "only_in_new"), (None, "final_state")]
     text = messages(result)
-    assert text[0].startswith("#4 GO_TO_POINT [4, 4, 1.2] now accepted (was rejected: ")
-    assert text[1] == "#5 GO_TO_POINT [0, 0, 1.2] only in the replay: the mission took another path"
+    assert text[0].startswith("#4 GO_TO_POINT coordinates=[4, 4, 1.2] now accepted (was rejected: ")
+    assert text[1] == (
+        "#5 GO_TO_POINT coordinates=[0, 0, 1.2] only in the replay: the mission took another path"
+    )
     assert result.diff is not None
     assert result.diff.differences[1].new_index == 5
     assert result.diff.differences[1].base_index is None
@@ -262,4 +269,4 @@ def test_without_script_the_command_stream_is_replayed(work: Path) -> None:
     assert any("no mission.py attachment" in note for note in same.notes)
     changed = replay(path, catalog_for(work, "removed"), mode=Mode.closed)
     assert kinds(changed) == [(3, "accepted")]
-    assert messages(changed) == ["#3 ROTATE 90 now rejected: unknown behavior ROTATE"]
+    assert messages(changed) == ["#3 ROTATE angle=90 now rejected: unknown behavior ROTATE"]

@@ -79,7 +79,7 @@ def test_narrowed_range_rejects_without_closed_loop_consequences(
     # No "#6 now ends after 0.1 s": in open loop the way home took what it took.
     assert kinds(result) == [(4, "accepted")]
     assert messages(result) == [
-        "#4 GO_TO_POINT [3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 "
+        "#4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected: GO_TO_POINT: COORDINATES needs 3 "
         "numbers in [-2, 2], got [3, 5.5, 1.3] (3 is outside)"
     ]
 
@@ -105,7 +105,7 @@ def test_shortened_timeout_without_final_state(recs: dict[str, Path], work: Path
     # The final state is the recorded one in open loop: never a difference.
     assert kinds(result) == [(4, "end_event"), (6, "end_event")]
     assert messages(result)[1] == (
-        "#6 GO_TO_POINT [0, 0, 1.41] now ends TIME_OUT after 3.0 s "
+        "#6 GO_TO_POINT coordinates=[0, 0, 1.41] now ends TIME_OUT after 3.0 s "
         "(was GOAL_ACHIEVED after 5.3 s): no result within 3 s"
     )
 

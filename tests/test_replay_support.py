@@ -101,7 +101,7 @@ def record(
     seed: int = 0,
     world: Path | None = None,
 ) -> Path:
-    """`aeroexec run MISSION --catalog CATALOG --seed S --world W --record PATH`, quietly."""
+    """`aeroexec run MISSION --catalog CATALOG --seed S --world W --output PATH`, quietly."""
     config = SessionConfig(mission=mission, catalog=catalog, seed=seed, world=world, record=path)
     with contextlib.redirect_stdout(io.StringIO()):
         simulate(config)

@@ -45,7 +45,7 @@ def test_sys_exit_in_a_mission_is_its_failure_not_aeroexecs_exit(tmp_path: Path)
     )
     record = tmp_path / "out.mcap"
     result = subprocess.run(
-        [sys.executable, "-m", "aeroexec", "run", str(path), "-r", str(record)],
+        [sys.executable, "-m", "aeroexec", "run", str(path), "-o", str(record)],
         capture_output=True,
         text=True,
         check=False,
@@ -108,7 +108,7 @@ FOREVER = (
 def test_max_sim_time_stops_a_mission_that_never_ends(tmp_path: Path) -> None:
     path = mission(tmp_path, FOREVER)
     record = tmp_path / "forever.mcap"
-    result = runner.invoke(app, ["run", str(path), "-q", "--max-sim-time", "60", "-r", str(record)])
+    result = runner.invoke(app, ["run", str(path), "-q", "--max-sim-time", "60", "-o", str(record)])
     assert result.exit_code == 1
     assert "60.0 s simulated" in result.output
     assert (
@@ -151,7 +151,7 @@ def test_keep_hovering_fails_when_the_battery_dies_and_run_says_so(tmp_path: Pat
     world.write_text(LOW_BATTERY_WORLD, encoding="utf-8")
     path = mission(tmp_path, HOVER_LONG)
     record = tmp_path / "h.mcap"
-    result = runner.invoke(app, ["run", str(path), "--world", str(world), "-r", str(record)])
+    result = runner.invoke(app, ["run", str(path), "--world", str(world), "-o", str(record)])
     assert result.exit_code == 1, result.output
     out = result.output
     assert "KEEP_HOVERING PROCESS_FAILURE after 237.8 s (vehicle fault: battery_empty)" in out

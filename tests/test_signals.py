@@ -9,6 +9,7 @@ one, say which in one stderr line, and exit 128 + signal.
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -86,7 +87,7 @@ def stopped(process: subprocess.Popen[str], signum: int) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
     name = signal.Signals(signum).name
-    assert lines[0].startswith(f"aeroexec: interrupted by {name}"), err
+    assert re.match(rf"aeroexec [a-z]+: interrupted by {name}\b", lines[0]), err
     return lines[0]
 
 
@@ -122,7 +123,7 @@ def long_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_run_record_is_finalized(tmp_path: Path, signum: int) -> None:
     script, markers = mission(tmp_path, BUSY)
     out = tmp_path / "flight.mcap"
-    process = start("run", str(script), "-q", "-r", str(out), cwd=tmp_path)
+    process = start("run", str(script), "-q", "-o", str(out), cwd=tmp_path)
     when(lambda: any(markers.iterdir()), process)
     line = stopped(process, signum)
     assert f"recording finalized: {out} (" in line and "messages, complete)" in line
@@ -132,7 +133,7 @@ def test_run_record_is_finalized(tmp_path: Path, signum: int) -> None:
 def test_a_mission_spinning_in_its_own_loop_stops_at_the_second_signal(tmp_path: Path) -> None:
     script, markers = mission(tmp_path, SPIN)
     out = tmp_path / "spin.mcap"
-    process = start("run", str(script), "-q", "-r", str(out), cwd=tmp_path)
+    process = start("run", str(script), "-q", "-o", str(out), cwd=tmp_path)
     when(lambda: any(markers.iterdir()), process)
     process.send_signal(signal.SIGINT)
     time.sleep(0.5)
@@ -168,7 +169,7 @@ def test_replay_jobs_pass_the_signal_to_their_workers(tmp_path: Path, long_recor
         str(script),
         "--jobs",
         "2",
-        "--out-dir",
+        "--output-dir",
         str(out_dir),
         cwd=tmp_path,
     )
@@ -183,7 +184,7 @@ def test_replay_jobs_pass_the_signal_to_their_workers(tmp_path: Path, long_recor
 def test_view_save_removes_its_partial_file(tmp_path: Path, long_recording: Path) -> None:
     out = tmp_path / "flight.rrd"
     partial = tmp_path / ".flight.rrd.partial"
-    process = start("view", str(long_recording), "--save", str(out), cwd=tmp_path)
+    process = start("view", str(long_recording), "--output", str(out), cwd=tmp_path)
     when(partial.exists, process)
     line = stopped(process, signal.SIGHUP)
     assert line.endswith(f"the partial output was removed, {out} not written")

@@ -250,7 +250,7 @@ def fly_args(mission: Path, url: str, record: Path, *extra: str) -> list[str]:
         str(mission),
         "--connect",
         url,
-        "--record",
+        "--output",
         str(record),
         "--connect-timeout",
         "120",
@@ -397,7 +397,7 @@ def test_sitl_stopped_mid_flight_is_a_lost_link_then_the_failsafe_lands(
         err.strip()
         .splitlines()[-1]
         .startswith(
-            "aeroexec: the link was lost 1 time during the flight; vehicle on the ground at ("
+            "aeroexec fly: the link was lost 1 time during the flight; vehicle on the ground at ("
         )
     )
     complete, topics = recorded(record)
@@ -439,7 +439,7 @@ def test_sitl_killed_mid_flight_ends_fly_with_the_vehicle_last_seen(
     assert code == 1
     line = err.strip().splitlines()[-1]
     assert line.startswith(
-        "aeroexec: vehicle not landed: link lost, no heartbeat for 2 s; last seen flying at ("
+        "aeroexec fly: vehicle not landed: link lost, no heartbeat for 2 s; last seen flying at ("
     ), err
     assert " m in GUIDED, armed, " in line and line.endswith(" s ago")
     complete, topics = recorded(record)
@@ -477,7 +477,7 @@ def test_sigterm_of_fly_mid_flight_lands_finalizes_and_exits_143(
 
     assert code == 143
     (line,) = err.strip().splitlines()
-    assert line.startswith("aeroexec: interrupted by SIGTERM; vehicle on the ground at (")
+    assert line.startswith("aeroexec fly: interrupted by SIGTERM; vehicle on the ground at (")
     assert line.endswith(f"in LAND, disarmed; recording finalized: {record}")
     complete, topics = recorded(record)
     assert complete

@@ -296,9 +296,13 @@ def test_mission_pattern_matching_nothing(tmp_path: Path) -> None:
 
 
 def test_unknown_format_and_severity() -> None:
-    assert_one_line_error(*run(str(THESIS_CATALOG), "--format", "xml"), "unknown format 'xml'")
     assert_one_line_error(
-        *run(str(THESIS_CATALOG), "--min-severity", "fatal"), "unknown severity 'fatal'"
+        *run(str(THESIS_CATALOG), "--format", "xml"),
+        "invalid value for --format: 'xml' is not one of 'text', 'json', 'sarif', 'github'",
+    )
+    assert_one_line_error(
+        *run(str(THESIS_CATALOG), "--min-severity", "fatal"),
+        "invalid value for --min-severity: 'fatal' is not one of 'info', 'warning', 'error'",
     )
 
 

@@ -98,7 +98,7 @@ def test_save_writes_there_and_does_not_spawn(
 ) -> None:
     target = tmp_path / "out" / "x.rrd"
     target.parent.mkdir()
-    code, _, err = _invoke("view", flight, "--save", target)
+    code, _, err = _invoke("view", flight, "--output", target)
     assert code == 0, err
     assert target.is_file() and not flight.with_suffix(".rrd").exists()
     assert launches == []
@@ -118,7 +118,7 @@ def test_save_with_spawn_opens_the_saved_file(
     flight: Path, tmp_path: Path, launches: list[tuple[Path, bool]]
 ) -> None:
     target = tmp_path / "s.rrd"
-    assert _invoke("view", flight, "--save", target, "--spawn")[0] == 0
+    assert _invoke("view", flight, "--output", target, "--spawn")[0] == 0
     assert launches == [(target, False)]
 
 
@@ -149,7 +149,9 @@ def test_web_port_and_allow_remote(flight: Path, served: list[tuple[Path, str, i
 def test_web_options_without_web_are_refused(flight: Path, args: list[str]) -> None:
     code, out, err = _invoke("view", flight, *args)
     assert code == 2 and out == ""
-    assert err == "aeroexec: error: --port and --allow-remote are for the web viewer: add --web\n"
+    assert (
+        err == "aeroexec view: error: --port and --allow-remote are for the web viewer: add --web\n"
+    )
     assert not flight.with_suffix(".rrd").exists()
 
 
@@ -204,7 +206,7 @@ def test_help_has_an_example() -> None:
     code, out, _ = _invoke("view", "--help")
     assert code == 0
     assert "aeroexec view flight.mcap" in out
-    assert "--save" in out and "--web" in out
+    assert "--output" in out and "--web" in out
 
 
 # -- inputs that are not readable aeroexec recordings -----------------------------------
@@ -242,7 +244,7 @@ def test_truncated_inside_the_magic(flight: Path, tmp_path: Path) -> None:
 
 def test_foreign_mcap_names_its_profile(tmp_path: Path) -> None:
     assert ROS2_BAG.is_file()
-    code, out, err = _invoke("view", ROS2_BAG, "--save", tmp_path / "x.rrd")
+    code, out, err = _invoke("view", ROS2_BAG, "--output", tmp_path / "x.rrd")
     _assert_one_line_error(code, out, err, "not an aeroexec recording (profile ros2)")
     assert not (tmp_path / "x.rrd").exists()
 
@@ -259,9 +261,9 @@ def test_missing_file(tmp_path: Path) -> None:
 
 
 def test_unwritable_output(flight: Path, tmp_path: Path) -> None:
-    code, out, err = _invoke("view", flight, "--save", tmp_path / "no" / "dir" / "x.rrd")
+    code, out, err = _invoke("view", flight, "--output", tmp_path / "no" / "dir" / "x.rrd")
     _assert_one_line_error(code, out, err, "cannot write")
-    code, out, err = _invoke("view", flight, "--save", tmp_path)
+    code, out, err = _invoke("view", flight, "--output", tmp_path)
     _assert_one_line_error(code, out, err, "is a directory")
 
 

@@ -135,7 +135,7 @@ def test_serves_on_loopback_and_stops_with_aeroexec_on_sigterm(
     flight: Path, tmp_path: Path, views: list[View]
 ) -> None:
     port = _free_port()
-    view = View(flight, "--web", "--port", str(port), "--save", str(tmp_path / "f.rrd"))
+    view = View(flight, "--web", "--port", str(port), "--output", str(tmp_path / "f.rrd"))
     views.append(view)
     url = view.wait_serving()
     assert url.startswith(f"http://127.0.0.1:{port}")
@@ -148,14 +148,14 @@ def test_serves_on_loopback_and_stops_with_aeroexec_on_sigterm(
     view.popen.send_signal(signal.SIGTERM)
     assert view.popen.wait(20) == 128 + signal.SIGTERM
     assert view.popen.stderr is not None
-    assert view.popen.stderr.read() == "aeroexec: interrupted by SIGTERM; web viewer stopped\n"
+    assert view.popen.stderr.read() == "aeroexec view: interrupted by SIGTERM; web viewer stopped\n"
     assert not _alive(viewer)  # stopped and reaped before aeroexec exited
 
 
 def test_the_viewer_ends_when_aeroexec_is_killed(
     flight: Path, tmp_path: Path, views: list[View]
 ) -> None:
-    view = View(flight, "--web", "--port", "0", "--save", str(tmp_path / "f.rrd"))
+    view = View(flight, "--web", "--port", "0", "--output", str(tmp_path / "f.rrd"))
     views.append(view)
     view.wait_serving()
     viewer = view.viewer()

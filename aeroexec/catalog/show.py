@@ -4,7 +4,8 @@ Three renderings of the same facts, all computed by `catalog_facts`:
 
 * `render_plain` — line-oriented text for pipes and tests: stable order, no color,
   no width-dependent wrapping, every diagnostic on its own `file:line:col: ...` line;
-* `render_rich` — `rich` tables for a terminal;
+* `render_rich` — the same facts for a terminal: headings and wrapped fields that fit
+  80 columns without splitting a name;
 * `catalog_to_json` — one JSON-able object for machines.
 
 Everything is in catalog order (the executive's tie-break order), so the output of the
@@ -14,12 +15,12 @@ same catalog never changes between runs.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
 from rich.console import Console
-from rich.table import Table
 from rich.text import Text
 
 from aeroexec.catalog.model import (
@@ -223,7 +224,8 @@ def render_plain(catalog: Catalog) -> str:
         "",
         f"default capabilities: {_names(catalog.default_capabilities)}",
         "",
-        f"diagnostics ({_severity_counts(facts.diagnostics)})",
+        VERIFY_NOTE.format(file=catalog.source),
+        f"loader diagnostics ({_severity_counts(facts.diagnostics)})",
     ]
     out += [str(d) for d in facts.diagnostics]
     # Names come from the YAML and may hold newlines; one entry must stay one line.
@@ -231,73 +233,137 @@ def render_plain(catalog: Catalog) -> str:
 
 
 # -- rich (terminal) ----------------------------------------------------------------------
-def _cell(lines: Iterable[str]) -> Text:
-    # Text, not markup strings: catalog names may contain `[` and must print as written.
-    return Text("\n".join(lines) or "-")
+#: What the loader's diagnostics are not: the verifier's rules (shown with every rendering).
+VERIFY_NOTE = "`aeroexec verify {file}` is the check: references, conflicts, start order, missions"
+
+
+def _wrapped(
+    console: Console, indent: int, label: str, label_width: int, value: str, style: str = ""
+) -> None:
+    """`label  value`, the value wrapped at spaces under itself (a name is never split)."""
+    hang = indent + label_width + 2
+    width = max(console.width - hang, 20)
+    lines = textwrap.wrap(value, width, break_long_words=False, break_on_hyphens=False) or [""]
+    for i, line in enumerate(lines):
+        text = Text(" " * indent)
+        text.append(f"{label if i == 0 else '':<{label_width}}  ", style="dim")
+        text.append(line, style=style)
+        console.print(text, no_wrap=True, overflow="ignore", crop=False)
+
+
+def _paragraph(console: Console, parts: list[tuple[str, str]], hang: int = 4) -> None:
+    """Styled `parts` as lines of the console's width, broken at spaces only; lines after
+    the first indented by `hang`."""
+    plain = "".join(text for text, _ in parts)
+    lines = textwrap.wrap(
+        plain,
+        max(console.width, 40),
+        subsequent_indent=" " * hang,
+        break_long_words=False,
+        break_on_hyphens=False,
+    )
+    styles = [style for text, style in parts for _ in text]
+    position = 0
+    for number, line in enumerate(lines):
+        body = line[hang:] if number else line
+        position = plain.index(body, position)
+        text = Text(line[: len(line) - len(body)])
+        start = 0
+        for end in range(1, len(body) + 1):
+            if end == len(body) or styles[position + end] != styles[position + start]:
+                text.append(body[start:end], style=styles[position + start])
+                start = end
+        position += len(body)
+        console.print(text, no_wrap=True, overflow="ignore", crop=False)
+
+
+def _heading(console: Console, name: str, style: str, note: str = "", note_style: str = "") -> None:
+    text = Text("  ")
+    text.append(name, style=style)
+    if note:
+        text.append(f"  {note}", style=note_style)
+    console.print(text, no_wrap=True, overflow="ignore", crop=False)
+
+
+def _fields(console: Console, fields: list[tuple[str, str]]) -> None:
+    shown = [(label, value) for label, value in fields if value]
+    width = max((len(label) for label, _ in shown), default=0)
+    for label, value in shown:
+        _wrapped(console, 6, label, width, value)
 
 
 def render_rich(catalog: Catalog, console: Console) -> None:
-    """The catalog as colored tables on `console` (for a terminal)."""
+    """The catalog for a terminal of any width (80 columns and up): one heading per
+    behavior, list and capability, its non-empty fields under it, wrapped between names
+    (never inside one); errors and warnings of the loader, with the count of its infos."""
     facts = catalog_facts(catalog)
-    header = Text()
-    header.append(catalog.source, style="bold")
-    header.append(f"  dialect {catalog.dialect}: ", style="dim")
-    header.append(_DIALECTS.get(catalog.dialect, catalog.dialect))
-    console.print(header)
+    console.print(Text(catalog.source, style="bold"))
+    console.print(Text(f"dialect: {_DIALECTS.get(catalog.dialect, catalog.dialect)}", style="dim"))
     console.print(Text(_counts(facts), style="dim"))
 
-    behaviors = Table(title="Behaviors", title_justify="left", show_lines=True)
-    for column in (
-        "Behavior",
-        "Timeout",
-        "Recurrent",
-        "Incompatible lists",
-        "Preempts",
-        "Capabilities",
-        "Arguments",
-    ):
-        behaviors.add_column(column, overflow="fold")
+    console.print(Text(f"\nBehaviors ({len(facts.behaviors)})", style="bold underline"))
     for b in facts.behaviors:
         d = b.descriptor
-        behaviors.add_row(
-            Text(d.name, style="bold"),
-            Text(_seconds(d.timeout)),
-            Text(_yes_no(d.recurrent), style="magenta" if d.recurrent else ""),
-            _cell(d.incompatible_lists),
-            Text(", ".join(b.preempts) or "-"),  # long: let rich wrap it
-            _cell(d.capabilities),
-            _cell(_argument_line(spec) for spec in d.arguments),
+        timeout = "no timeout" if d.timeout is None else f"timeout {_seconds(d.timeout)}"
+        _heading(console, d.name, "bold", f"{timeout}{', recurrent' if d.recurrent else ''}")
+        lists = ", ".join(d.incompatible_lists)
+        if lists:
+            lists += f" (preempts {len(b.preempts)})"
+        _fields(
+            console,
+            [
+                ("incompatible", lists),
+                ("capabilities", ", ".join(d.capabilities)),
+                *((spec.name, spec.describe()) for spec in d.arguments),
+            ],
         )
-    console.print(behaviors)
 
-    lists = Table(title="Lists", title_justify="left")
-    for column in ("List", "Behaviors", "Named by"):
-        lists.add_column(column, overflow="fold")
+    console.print(Text(f"\nLists ({len(facts.lists)})", style="bold underline"))
     for lst in facts.lists:
-        lists.add_row(Text(lst.name, style="bold"), _cell(lst.behaviors), _cell(lst.named_by))
-    console.print(lists)
+        _heading(console, lst.name, "bold")
+        _fields(
+            console,
+            [("behaviors", ", ".join(lst.behaviors) or "-"), ("named by", ", ".join(lst.named_by))],
+        )
 
-    capabilities = Table(title="Capabilities", title_justify="left", show_lines=True)
-    for column in ("Capability", "Default", "Processes", "Conflicts", "Requires", "Used by"):
-        capabilities.add_column(column, overflow="fold")
+    console.print(Text(f"\nCapabilities ({len(facts.capabilities)})", style="bold underline"))
     for c in facts.capabilities:
         d = c.descriptor
-        capabilities.add_row(
-            Text(d.name, style="bold"),
-            Text(_yes_no(d.active_by_default), style="green" if d.active_by_default else ""),
-            _cell(d.processes),
-            _cell(c.conflicts),
-            _cell(d.required_capabilities),
-            _cell(c.used_by),
+        default = "active by default" if d.active_by_default else ""
+        _heading(console, d.name, "bold", default, "green")
+        _fields(
+            console,
+            [
+                ("processes", ", ".join(d.processes)),
+                ("conflicts", ", ".join(c.conflicts)),
+                ("requires", ", ".join(d.required_capabilities)),
+                ("used by", ", ".join(c.used_by)),
+            ],
         )
-    console.print(capabilities)
 
-    console.print(Text(f"Diagnostics ({_severity_counts(facts.diagnostics)})", style="bold"))
+    console.print(
+        Text(f"\nLoader diagnostics ({_severity_counts(facts.diagnostics)})", style="bold")
+    )
+    infos = 0
     for diagnostic in facts.diagnostics:
-        line = Text(one_line(f"{diagnostic.mark}: "))
-        line.append(diagnostic.severity.value, style=_SEVERITY_STYLE[diagnostic.severity])
-        line.append(one_line(f" {diagnostic.code} {diagnostic.message}"))
-        console.print(line, soft_wrap=True)
+        if diagnostic.severity is Severity.INFO:
+            infos += 1
+            continue
+        severity = diagnostic.severity
+        _paragraph(
+            console,
+            [
+                (one_line(f"{diagnostic.mark}: "), ""),
+                (severity.value, _SEVERITY_STYLE[severity]),
+                (one_line(f" {diagnostic.code} {diagnostic.message}"), ""),
+            ],
+        )
+    if infos:
+        _paragraph(
+            console,
+            [(f"{infos} infos not listed here (--color never or -f json lists them)", "dim")],
+        )
+    _paragraph(console, [(VERIFY_NOTE.format(file=catalog.source), "dim")], hang=0)
 
 
 # -- JSON ---------------------------------------------------------------------------------

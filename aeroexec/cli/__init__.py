@@ -7,7 +7,8 @@ from aeroexec.cli.app import app
 
 
 def main() -> None:
-    app()
+    # `python -m aeroexec` too says `aeroexec run: error: ...`, not `python -m aeroexec run`.
+    app(prog_name="aeroexec")
 
 
 __all__ = ["app", "main"]

@@ -17,8 +17,11 @@ from typing import Any, TypeVar
 import typer
 import typer.core
 import typer.main
+from typer._click.core import Command as ClickCommand
+from typer._click.shell_completion import CompletionItem
 
 from aeroexec import __version__
+from aeroexec.cli.command import Group, Typer, running
 from aeroexec.cli.commands import COMMANDS
 from aeroexec.errors import AeroexecError, OutputLost
 from aeroexec.interrupts import Interrupted, signals_as_interrupts
@@ -84,8 +87,9 @@ def _load_command(name: str) -> Any | None:
     return None
 
 
-class LazyGroup(typer.core.TyperGroup):
-    """The root group: commands load on first use; `--help` lists them from the table."""
+class LazyGroup(Group):
+    """The root group: commands load on first use; `--help` and shell completion list
+    them from the table."""
 
     def __init__(self, *, commands: Mapping[str, Any] | None = None, **attrs: Any) -> None:
         super().__init__(**attrs)
@@ -110,19 +114,33 @@ class LazyGroup(typer.core.TyperGroup):
             with formatter.section("Commands"):
                 formatter.write_dl(rows)
 
+    def shell_complete(self, ctx: Any, incomplete: str) -> list[CompletionItem]:
+        # Completing a command name must not import every command (rerun, the verifier...).
+        names = [
+            CompletionItem(name, help=entry.summary)
+            for name, entry in COMMANDS.items()
+            if name.startswith(incomplete)
+        ]
+        # The group's own options, but not typer's command listing (it builds them all).
+        return names + ClickCommand.shell_complete(self, ctx, incomplete)
 
-app = typer.Typer(
+
+app = Typer(
     cls=LazyGroup,
     name="aeroexec",
     help=(
         "Behavior management for a drone's executive layer (after the 2017 Aerostack "
         "design): run missions on a deterministic core, record them to MCAP, verify "
         "catalogs, replay and diff recordings, fly over MAVLink, view in Rerun.\n\n"
+        "Start with `aeroexec run missions/appendix_c.py -o flight.mcap`; every command "
+        "has -h.\n\n"
         "Exit codes: 0 success, 1 the check found problems (or the mission failed), "
-        "2 the input could not be read."
+        "2 an input could not be read or the command line is wrong, 128+N stopped by "
+        "signal N."
     ),
     no_args_is_help=True,
-    add_completion=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+    add_completion=True,
     pretty_exceptions_enable=False,
     rich_markup_mode=None,
 )
@@ -150,6 +168,11 @@ def error_line(message: str) -> None:
     typer.echo(message, err=True)
 
 
+def say(kind: str, message: str) -> None:
+    """`aeroexec CMD: KIND: message` on stderr (kind: error, warning, note)."""
+    error_line(f"{running()}: {kind}: {message}")
+
+
 def guarded(func: F) -> F:
     """Turn aeroexec's input errors (and outputs it could not write) into one stderr
     line and exit code 2 (no traceback), and SIGINT/SIGTERM/SIGHUP into a clean stop:
@@ -166,13 +189,13 @@ def guarded(func: F) -> F:
                 check_interrupts()
                 return result
         except Interrupted as exc:
-            error_line(f"aeroexec: {exc.line()}")
+            error_line(f"{running()}: {exc.line()}")
             raise typer.Exit(exc.exit_code) from None
         except (AeroexecError, OutputLost) as caught:
             exc = caught.error if isinstance(caught, OutputLost) else caught
             text = str(exc)
             if exc.mark is None:
-                text = f"aeroexec: error: {text}"
+                text = f"{running()}: error: {text}"
             error_line(text)
             raise typer.Exit(2) from None
         except BrokenPipeError:

@@ -6,13 +6,14 @@ from __future__ import annotations
 import json
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Any
 
 import typer
 
 from aeroexec.catalog import load_catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, guarded
+from aeroexec.cli.options import Color, catalog_option, color_option, format_option, use_color
 from aeroexec.cli.project import BehaviorsOption, catalog_path, project, project_behaviors
 from aeroexec.cli.tables import print_table
 from aeroexec.plugins import Implementation
@@ -51,18 +52,14 @@ def _as_dict(implementation: Implementation, in_catalog: bool) -> dict[str, Any]
 @app.command("behaviors")
 @guarded
 def behaviors_command(
-    catalog: Annotated[
-        Path | None,
-        typer.Option(
-            "--catalog",
-            "-c",
-            help="Catalog to check (default: the project's, else the bundled default).",
-        ),
-    ] = None,
+    catalog: Path | None = catalog_option(
+        "Catalog to check (default: the project's, else the bundled default)."
+    ),
     behaviors: BehaviorsOption = None,
-    output_format: Annotated[
-        OutputFormat, typer.Option("--format", "-f", help="text or json.")
-    ] = OutputFormat.text,
+    output_format: OutputFormat = format_option(
+        OutputFormat, "text (a table) or json (every field, for machines)."
+    ),
+    color: Color = color_option(),
 ) -> None:
     """List every behavior implementation run, fly, replay and verify would use: the
     behavior, its class (module:Class), its file and the source that provided it; then
@@ -109,6 +106,7 @@ def behaviors_command(
             f"Behavior implementations ({len(rows)})",
             ["behavior", "implementation", "file", "source", ""],
             rows,
+            styled=use_color(color),
         )
         typer.echo(f"looked in: {'; '.join(found.searched)}")
         if missing:

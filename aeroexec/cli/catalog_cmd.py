@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import sys
 from enum import Enum
 from typing import Annotated
 
@@ -13,8 +12,10 @@ from rich.console import Console
 from aeroexec.catalog import load_catalog
 from aeroexec.catalog.show import catalog_to_json, render_plain, render_rich
 from aeroexec.cli.app import app, guarded
+from aeroexec.cli.command import Typer
+from aeroexec.cli.options import Color, color_option, format_option, use_color
 
-catalog_app = typer.Typer(
+catalog_app = Typer(
     help=(
         "Inspect behavior catalogs (the YAML file of behavior_descriptors, behavior_lists "
         "and capability_descriptors that the behavior specialist reads).\n\n"
@@ -39,33 +40,33 @@ def show(
     file: Annotated[
         str,
         typer.Argument(
-            metavar="FILE",
+            metavar="CATALOG",
             help="The catalog YAML file (thesis Appendix A or Aerostack 2.x dialect).",
             show_default=False,
         ),
     ],
-    output_format: Annotated[
+    output_format: OutputFormat = format_option(
         OutputFormat,
-        typer.Option(
-            "--format",
-            help="text: tables on a terminal, plain grep-able lines otherwise; "
-            "json: one JSON object for machines.",
-        ),
-    ] = OutputFormat.text,
+        "text: for people (styled per --color, else plain grep-able lines); json: one "
+        "JSON object for machines.",
+    ),
+    color: Color = color_option(),
 ) -> None:
     """Show a behavior catalog: what the executive will do with it.
 
-    Loads FILE strictly, as the executive does, and prints every behavior (timeout,
+    Loads CATALOG strictly, as the executive does, and prints every behavior (timeout,
     recurrent flag, incompatible lists and the behaviors they preempt, capabilities,
     arguments with their allowed values), every list with its members, every capability
     (processes, conflicts, required capabilities, active by default), the dialect read,
-    then the loader's warnings and infos as `file:line:col: severity CODE message`.
+    then the loader's diagnostics as `file:line:col: severity CODE message`. Those are
+    the loader's only: `aeroexec verify CATALOG` is the check (its rules find dangling
+    references, capability conflicts, start-order cycles...).
 
     \b
     Examples:
       aeroexec catalog show catalog/aerostack-2017.yaml
       aeroexec catalog show catalog/default.yaml | grep -A6 '^  GO_TO_POINT '
-      aeroexec catalog show my_catalog.yaml --format json | jq '.behaviors[].name'
+      aeroexec catalog show my_catalog.yaml -f json | jq '.behaviors[].name'
 
     Exit codes: 0 shown; 2 the catalog could not be loaded (one line on stderr,
     `file:line:col: error: ...`).
@@ -75,7 +76,7 @@ def show(
     catalog = load_catalog(file)
     if output_format is OutputFormat.json:
         typer.echo(json.dumps(catalog_to_json(catalog), indent=2, allow_nan=False))
-    elif sys.stdout.isatty():
-        render_rich(catalog, Console())
+    elif use_color(color):
+        render_rich(catalog, Console(force_terminal=True))
     else:
         typer.echo(render_plain(catalog), nl=False)

@@ -40,7 +40,7 @@ COMMANDS: dict[str, CommandEntry] = {
     ),
     "recover": CommandEntry(
         "recording_cmd",
-        "Write a complete MCAP file with every message that can be read from BROKEN.",
+        "Write a complete MCAP file with every message that can be read from REC.",
     ),
     "verify": CommandEntry(
         "verify_cmd", "Check behavior catalogs and mission scripts offline, before they fly."

@@ -9,10 +9,10 @@ import typer
 
 from aeroexec.cli.app import app, guarded
 from aeroexec.cli.replay_cmd import (
-    FormatOption,
     OutputFormat,
     PositionToleranceOption,
     ToleranceOption,
+    report_format_option,
     tolerance_of,
 )
 from aeroexec.replay.engine import diff_recordings
@@ -28,7 +28,7 @@ def diff(
     new: Annotated[
         str, typer.Argument(metavar="NEW", help="The recording to compare.", show_default=False)
     ],
-    output_format: FormatOption = OutputFormat.text,
+    output_format: OutputFormat = report_format_option(),
     tolerance: ToleranceOption = 0.5,
     position_tolerance: PositionToleranceOption = 0.1,
 ) -> None:

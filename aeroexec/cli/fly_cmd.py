@@ -2,12 +2,28 @@
 
 from __future__ import annotations
 
+from enum import Enum
 from pathlib import Path
 
 import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.command import running
+from aeroexec.cli.options import (
+    Color,
+    allow_remote_option,
+    catalog_option,
+    choices,
+    color_option,
+    connect_option,
+    debug_option,
+    deprecated_option,
+    output_option,
+    quiet_option,
+    replaced,
+    use_color,
+)
 from aeroexec.cli.project import (
     AllowUnimplementedOption,
     BehaviorsOption,
@@ -16,11 +32,23 @@ from aeroexec.cli.project import (
     project,
     project_behaviors,
 )
-from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome
+from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome, silenced
 from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
 from aeroexec.mavlink.vehicle import MavlinkVehicle
 from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
+
+
+class Failsafe(str, Enum):
+    land = "land"
+    hold = "hold"
+    rtl = "rtl"
+
+
+class OnExit(str, Enum):
+    land = "land"
+    hold = "hold"
+    none = "none"
 
 
 def _listening(vehicle: MavlinkVehicle) -> None:
@@ -45,81 +73,86 @@ def fly_command(
     mission: Path = typer.Argument(
         ..., metavar="MISSION", help="Mission script (Python, defines runMission())."
     ),
-    connect: str | None = typer.Option(
+    connect: str | None = connect_option(
         None,
-        "--connect",
-        metavar="URL",
-        help="MAVLink endpoint: udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT, "
+        "MAVLink endpoint: udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT, "
         "tcpin:HOST:PORT, or a serial device (/dev/ttyUSB0 or /dev/ttyUSB0,57600); "
         f"default: the project's, else {DEFAULT_GCS_URL}.",
     ),
     baud: int = typer.Option(
-        DEFAULT_BAUD, "--baud", metavar="N", help="Baud rate of a serial device given without one."
+        DEFAULT_BAUD,
+        "--baud",
+        metavar="N",
+        help="Baud rate of a serial device given without one.",
+        show_default=True,
     ),
-    catalog: Path | None = typer.Option(
-        None,
-        "--catalog",
-        "-c",
-        metavar="FILE",
-        help="Behavior catalog (YAML); default: the project's, else the bundled default.",
+    catalog: Path | None = catalog_option(
+        "Behavior catalog (YAML); default: the project's, else the bundled default."
     ),
-    record: Path | None = typer.Option(
-        None,
-        "--record",
-        "-r",
-        metavar="FILE",
-        help="Record the session (and all MAVLink traffic) to this MCAP file.",
+    output: Path | None = output_option(
+        "Record the session (and all MAVLink traffic) to this MCAP file."
     ),
+    record: Path | None = deprecated_option("--record", "-r", instead="-o/--output"),
     heartbeat_timeout: float = typer.Option(
         3.0,
         "--heartbeat-timeout",
         metavar="SECONDS",
         help="Seconds without an autopilot heartbeat = link lost.",
+        show_default=True,
     ),
     link_timeout: float = typer.Option(
         30.0,
         "--link-timeout",
         metavar="SECONDS",
         help="A link lost this long ends the flight (fly waits that long for it to return).",
+        show_default=True,
     ),
-    failsafe: str = typer.Option(
-        "land", "--failsafe", metavar="[land|hold|rtl]", help="What to do when a lost link returns."
+    failsafe: Failsafe = typer.Option(
+        Failsafe.land,
+        "--failsafe",
+        metavar=choices(Failsafe),
+        help="What to do when a lost link returns.",
+        show_default=True,
     ),
-    on_exit: str = typer.Option(
-        "land",
+    on_exit: OnExit = typer.Option(
+        OnExit.land,
         "--on-exit",
-        metavar="[land|hold|none]",
+        metavar=choices(OnExit),
         help="How the flight ends when the mission returns, raises or is stopped by a signal.",
+        show_default=True,
     ),
     signing_key: str | None = typer.Option(
         None,
         "--signing-key",
         metavar="KEY",
         help="MAVLink 2 signing: 64 hex digits or a passphrase.",
+        show_default=False,
     ),
-    allow_remote: bool = typer.Option(
-        False, "--allow-remote", help="Allow a non-loopback endpoint (a real network)."
-    ),
+    allow_remote: bool = allow_remote_option("Allow a non-loopback endpoint (a real network)."),
     connect_timeout: float = typer.Option(
         10.0,
         "--connect-timeout",
         metavar="SECONDS",
         help="Seconds to wait for the first heartbeat and position (SITL needs ~40 s to boot).",
+        show_default=True,
     ),
     behaviors: BehaviorsOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the summary."),
-    debug: bool = typer.Option(False, "--debug", help="Show the traceback if the mission raises."),
+    quiet: bool = quiet_option(),
+    debug: bool = debug_option(),
+    color: Color = color_option(),
 ) -> None:
     """Fly MISSION on a live autopilot (ArduPilot Copter, GUIDED mode) over MAVLink.
 
     The live counterpart of `aeroexec run`: same core, same behaviors, same printout,
-    on the wall clock. Try it against the simulator or ArduCopter SITL:
+    on the wall clock.
 
     \b
-        aeroexec mavsim --speed-factor 3 &
-        aeroexec fly missions/appendix_c.py --record flight.mcap
-        aeroexec fly missions/appendix_c.py --connect tcp:127.0.0.1:5760 --connect-timeout 60
+    Examples (mavsim, then ArduCopter SITL, which takes ~40 s to boot):
+      aeroexec mavsim --speed-factor 3 &
+      aeroexec fly missions/appendix_c.py -o flight.mcap
+      aeroexec fly missions/appendix_c.py --connect tcp:127.0.0.1:5760 \\
+          --connect-timeout 60
 
     However it ends, the vehicle is never left flying by surprise: see --on-exit,
     --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle
@@ -128,15 +161,16 @@ def fly_command(
     not be read or the autopilot never answered; 128+N when stopped by signal N (after
     the ending).
     """
+    output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
     settings = project()
     config = FlightConfig(
         mission=mission,
         connect=first(connect, settings.connect, DEFAULT_GCS_URL),
         catalog=catalog_path(catalog, settings, DEFAULT_CATALOG),
-        record=record,
+        record=output,
         heartbeat_timeout=heartbeat_timeout,
-        failsafe=failsafe,  # type: ignore[arg-type]  (checked by FlightConfig)
-        on_exit=on_exit,  # type: ignore[arg-type]  (checked by FlightConfig)
+        failsafe=failsafe.value,
+        on_exit=on_exit.value,
         link_timeout=link_timeout,
         signing_key=signing_key,
         allow_remote=allow_remote,
@@ -146,14 +180,15 @@ def fly_command(
         baud=baud,
     )
     printer = [] if quiet else [ActivityLog(on_change=print_row)]
-    result = fly(
-        config,
-        observers=printer,
-        on_listening=_listening,
-        on_connected=_connected,
-        announce=error_line,
-    )
-    print_summary(result, clock="flown")
+    with silenced(quiet):
+        result = fly(
+            config,
+            observers=printer,
+            on_listening=_listening,
+            on_connected=_connected,
+            announce=error_line,
+        )
+    print_summary(result, clock="flown", styled=use_color(color))
     typer.echo(f"mavlink: {result.metadata.get('link_summary', '')}")
     if result.ending is not None:
         for action in result.ending.actions:
@@ -163,6 +198,6 @@ def fly_command(
     # simulator's "vehicle lost" verdict is not needed here.
     mission_ok = report_outcome(result, debug, vehicle=False)
     if not result.safe:
-        error_line(f"aeroexec: {result.problem()}")
+        error_line(f"{running()}: {result.problem()}")
     if not (mission_ok and result.safe):
         raise typer.Exit(1)

@@ -1,4 +1,4 @@
-"""`aeroexec import BAG -o OUT.mcap`: a ROS 1 bag to an aeroexec recording."""
+"""`aeroexec import BAG -o FILE`: a ROS 1 bag to an aeroexec recording (MCAP)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import typer
 
 from aeroexec.bags.importer import import_bag
 from aeroexec.cli.app import app, guarded
+from aeroexec.cli.options import choices, format_option, output_option
 from aeroexec.viz.progress import progress_bar
 
 
@@ -33,33 +34,37 @@ def import_(
             metavar="BAG", help="A ROS 1 bag (v2.0; plain, bz2 or lz4 chunks).", show_default=False
         ),
     ],
-    output: Annotated[
-        str,
-        typer.Option(
-            "--output", "-o", metavar="OUT.mcap", help="The recording to write.", show_default=False
-        ),
-    ],
+    output: str = output_option("The recording (MCAP) to write.", required=True),
     mapping: Annotated[
         str | None,
         typer.Option(
             "--mapping",
-            "-m",
             metavar="FILE",
             help="Topic mapping (YAML). Default: Aerostack's topic names (see docs/bags.md).",
+            show_default=False,
         ),
     ] = None,
     drone: Annotated[
         str | None,
         typer.Option(
-            "--drone", help="The drone's namespace: {drone} in the mapping (default: drone1)."
+            "--drone",
+            metavar="NAME",
+            help="The drone's namespace: {drone} in the mapping (default: drone1).",
+            show_default=False,
         ),
     ] = None,
     compression: Annotated[
-        Compression, typer.Option("--compression", help="MCAP chunk compression.")
+        Compression,
+        typer.Option(
+            "--compression",
+            metavar=choices(Compression),
+            help="MCAP chunk compression.",
+            show_default=True,
+        ),
     ] = Compression.lz4,
-    output_format: Annotated[
-        ImportFormat, typer.Option("--format", help="text for people, json for machines.")
-    ] = ImportFormat.text,
+    output_format: ImportFormat = format_option(
+        ImportFormat, "text for people, json for machines."
+    ),
 ) -> None:
     """Convert a ROS 1 bag into an aeroexec recording (MCAP), losing nothing.
 
@@ -74,11 +79,11 @@ def import_(
     \b
     Examples:
       aeroexec import flight.bag -o flight.mcap
-      aeroexec import flight.bag -o flight.mcap --mapping my_topics.yaml --drone drone2
+      aeroexec import flight.bag -o flight.mcap --mapping map.yaml --drone drone2
       aeroexec replay flight.bag --catalog catalog/aerostack-2017.yaml
 
-    Exit codes: 0 written; 2 the bag or the mapping could not be read, or OUT not
-    written (one line on stderr; no partial file is left).
+    Exit codes: 0 written; 2 the bag or the mapping could not be read, or the recording
+    not written (one line on stderr; no partial file is left).
     """
     report = import_bag(
         bag,

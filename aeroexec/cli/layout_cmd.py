@@ -10,6 +10,7 @@ from typing import Annotated
 import typer
 
 from aeroexec.cli.app import app, guarded
+from aeroexec.cli.options import output_option
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.viz.foxglove_layout import layout_text
 
@@ -46,19 +47,15 @@ def layout(
             "--foxglove", help="A layout for Foxglove (and Lichtblick, its open-source fork)."
         ),
     ] = False,
-    output: Annotated[
-        Path | None,
-        typer.Option(
-            "--output",
-            "-o",
-            metavar="FILE",
-            help="Write the layout here (default: standard output).",
-            show_default=False,
-        ),
-    ] = None,
+    output: Path | None = output_option("Write the layout here (default: standard output)."),
     drone: Annotated[
         str,
-        typer.Option("--drone", metavar="NAME", help="The drone's namespace in the recordings."),
+        typer.Option(
+            "--drone",
+            metavar="NAME",
+            help="The drone's namespace in the recordings.",
+            show_default=True,
+        ),
     ] = "drone1",
 ) -> None:
     """Write a viewer layout for aeroexec recordings, to import once: the flight in 3D

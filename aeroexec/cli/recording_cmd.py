@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 from enum import Enum
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -12,6 +12,7 @@ from aeroexec.bags.bagfile import is_bag
 from aeroexec.bags.info import PROFILE as BAG_PROFILE
 from aeroexec.bags.info import bag_info
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.options import format_option, output_option
 from aeroexec.recording.info import recording_info
 from aeroexec.recording.recover import recover as recover_file
 
@@ -22,6 +23,10 @@ MAX_BEHAVIOR_LINES = 40
 class InfoFormat(str, Enum):
     text = "text"
     json = "json"
+
+
+def _format_option() -> Any:
+    return format_option(InfoFormat, "text for people, json for machines.")
 
 
 @app.command("info")
@@ -35,10 +40,7 @@ def info(
             show_default=False,
         ),
     ],
-    output_format: Annotated[
-        InfoFormat,
-        typer.Option("--format", help="text for people, json for machines."),
-    ] = InfoFormat.text,
+    output_format: InfoFormat = _format_option(),
 ) -> None:
     """Summarize a recording: duration, channels and message counts, behaviors and
     their outcomes, metadata, attachments, and whether the file is complete.
@@ -88,37 +90,25 @@ def recover(
     broken: Annotated[
         str,
         typer.Argument(
-            metavar="BROKEN", help="The damaged or unfinished MCAP file.", show_default=False
+            metavar="REC", help="The damaged or unfinished MCAP file.", show_default=False
         ),
     ],
-    output: Annotated[
-        str,
-        typer.Option(
-            "--output",
-            "-o",
-            metavar="FIXED",
-            help="Where to write the complete copy.",
-            show_default=False,
-        ),
-    ],
-    output_format: Annotated[
-        InfoFormat,
-        typer.Option("--format", help="text for people, json for machines."),
-    ] = InfoFormat.text,
+    output: str = output_option("Where to write the complete copy.", required=True),
+    output_format: InfoFormat = _format_option(),
 ) -> None:
-    """Write a complete MCAP file with every message that can be read from BROKEN.
+    """Write a complete MCAP file with every message that can be read from REC.
 
     A recording whose process was killed has no footer or summary, and one damaged in
-    transfer may end in garbage. recover reads BROKEN record by record up to the first
+    transfer may end in garbage. recover reads REC record by record up to the first
     damage and writes all schemas, channels, messages, attachments and metadata before it
-    to FIXED, with a proper summary and footer (readable by Foxglove and `mcap`). An
+    to the -o file, with a proper summary and footer (readable by Foxglove and `mcap`). An
     aeroexec recording loses at most its last flush interval (100 messages or 0.5 s).
 
     \b
     Example:
       aeroexec recover crashed.mcap -o fixed.mcap && aeroexec info fixed.mcap
 
-    Exit codes: 0 written; 2 BROKEN could not be read at all, or FIXED not written.
+    Exit codes: 0 written; 2 REC could not be read at all, or the copy not written.
     """
     report = recover_file(broken, output)
     if output_format is InfoFormat.json:

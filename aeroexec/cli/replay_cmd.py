@@ -7,12 +7,23 @@ import sys
 import time
 from enum import Enum
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.options import (
+    catalog_option,
+    choices,
+    deprecated_option,
+    format_option,
+    jobs_option,
+    mission_option,
+    output_dir_option,
+    output_option,
+    replaced,
+)
 from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
@@ -36,17 +47,27 @@ class OutputFormat(str, Enum):
     junit = "junit"
 
 
-# Options `replay` and `diff` share, declared once so both read the same.
-FormatOption = Annotated[
-    OutputFormat, typer.Option("--format", help="text, json or junit (JUnit XML).")
-]
+# Options `replay`, `diff` and `report merge` share, declared once so they read the same.
+def report_format_option() -> Any:
+    return format_option(OutputFormat, "text, json or junit (JUnit XML).")
+
+
 ToleranceOption = Annotated[
-    float, typer.Option("--tolerance", metavar="S", help="Allowed drift of end-event times (s).")
+    float,
+    typer.Option(
+        "--tolerance",
+        metavar="SECONDS",
+        help="Allowed drift of end-event times.",
+        show_default=True,
+    ),
 ]
 PositionToleranceOption = Annotated[
     float,
     typer.Option(
-        "--position-tolerance", metavar="M", help="Allowed drift of the final position (m)."
+        "--position-tolerance",
+        metavar="METERS",
+        help="Allowed drift of the final position.",
+        show_default=True,
     ),
 ]
 
@@ -60,14 +81,14 @@ def tolerance_of(seconds: float, metres: float) -> Tolerance:
 
 def _check_outputs(paths: list[str], output: str | None, out_dir: str | None) -> None:
     if output is not None and out_dir is not None:
-        raise AeroexecError("give -o/--output or --out-dir, not both")
+        raise AeroexecError("give -o/--output or --output-dir, not both")
     if output is not None and len(paths) != 1:
-        raise AeroexecError(f"-o/--output takes one recording, got {len(paths)}: use --out-dir")
+        raise AeroexecError(f"-o/--output takes one recording, got {len(paths)}: use --output-dir")
     targets = [output] if output is not None else []
     if out_dir is not None:
         targets = [output_for(p, out_dir) for p in paths]
     if len(set(targets)) != len(targets):
-        raise AeroexecError("--out-dir: two recordings would be written to the same file")
+        raise AeroexecError("--output-dir: two recordings would be written to the same file")
     sources = {Path(p).resolve() for p in paths if Path(p).exists()}
     for target in targets:
         if Path(target).resolve() in sources:
@@ -101,48 +122,37 @@ def replay(
             show_default=False,
         ),
     ],
-    catalog: Annotated[
-        Path | None,
-        typer.Option(
-            "--catalog", "-c", help="Catalog to replay with (default: each recording's own)."
-        ),
-    ] = None,
+    catalog: Path | None = catalog_option(
+        "Catalog to replay with (default: each recording's own)."
+    ),
     mode: Annotated[
         Mode | None,
         typer.Option(
             "--mode",
+            metavar=choices(Mode),
             help="closed: re-simulate the mission (default for simulated recordings); "
             "open: recorded inputs into the executive (default for live flights, bags).",
+            show_default=False,
         ),
     ] = None,
-    output: Annotated[
-        str | None,
-        typer.Option("--output", "-o", metavar="OUT.mcap", help="Record the replay (one REC)."),
-    ] = None,
-    out_dir: Annotated[
-        str | None,
-        typer.Option("--out-dir", metavar="DIR", help="Record each replay to DIR/<REC stem>.mcap."),
-    ] = None,
+    output: str | None = output_option("Record the replay to this MCAP file (one REC)."),
+    output_dir: str | None = output_dir_option("Record each replay to DIR/<REC stem>.mcap."),
+    out_dir: str | None = deprecated_option("--out-dir", instead="--output-dir", metavar="DIR"),
     check: Annotated[
         bool,
         typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
     ] = False,
-    jobs: Annotated[
-        int,
-        typer.Option(
-            "--jobs",
-            "-j",
-            min=1,
-            help="Replay this many recordings at once, in worker processes on this machine (at "
-            "most one per CPU; --executor local).",
-        ),
-    ] = 1,
+    jobs: int = jobs_option(
+        "Replay this many recordings at once, in worker processes on this machine (at most "
+        "one per CPU; --executor local)."
+    ),
     behaviors: BehaviorsOption = None,
     shard: Annotated[
         str | None,
         typer.Option(
             "--shard",
             metavar="K/N",
+            show_default=False,
             help="Replay only shard K of N (by a hash of each recording's path: stable when "
             "recordings are added); merge the shards' --format json with "
             "`aeroexec report merge`.",
@@ -152,24 +162,19 @@ def replay(
         str,
         typer.Option(
             "--executor",
-            metavar="local|ray|ray://HOST:PORT",
+            metavar="[local|ray|ray://HOST:PORT]",
             help="Where replays run: local (--jobs processes), ray (Ray on this machine) or "
             "a Ray cluster (needs aeroexec[ray]).",
+            show_default=True,
         ),
     ] = LOCAL,
-    output_format: FormatOption = OutputFormat.text,
+    output_format: OutputFormat = report_format_option(),
     tolerance: ToleranceOption = 0.5,
     position_tolerance: PositionToleranceOption = 0.1,
-    mission: Annotated[
-        Path | None,
-        typer.Option(
-            "--mission",
-            "-m",
-            metavar="FILE",
-            help="Closed loop: run this mission script (your copy of the recorded one; "
-            "a note says when it differs).",
-        ),
-    ] = None,
+    mission: Path | None = mission_option(
+        "Closed loop: run this mission script (your copy of the recorded one; a note says "
+        "when it differs)."
+    ),
     trust_recording: Annotated[
         bool,
         typer.Option(
@@ -199,13 +204,14 @@ def replay(
     Examples:
       aeroexec replay flight.mcap --catalog catalog/new.yaml
       aeroexec replay flight.mcap --mission missions/appendix_c.py -o again.mcap
-      aeroexec replay recordings/ --catalog new.yaml --check --jobs 4 --format junit > replay.xml
+      aeroexec replay recordings/ -c new.yaml --check -j 4 -f junit > replay.xml
       aeroexec replay recordings/ --shard 2/4 --format json > shard-2.json
       aeroexec replay s3://flights/2024/ --executor ray://head:10001 --check
 
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs; 2 an input could not be read (one line on stderr each).
     """
+    out_dir = replaced(output_dir, out_dir, new_name="--output-dir", old_name="--out-dir")
     # A JUnit report says when the run started (and checks SOURCE_DATE_EPOCH up front).
     timing = start_timing() if output_format is OutputFormat.junit else None
     started = time.perf_counter()
@@ -233,7 +239,7 @@ def replay(
     _check_outputs(paths, output, out_dir)
     if executor.startswith("ray://") and (output is not None or out_dir is not None):
         raise AeroexecError(
-            "-o/--output and --out-dir write where the replay runs: not on a cluster (ray://)"
+            "-o/--output and --output-dir write where the replay runs: not on a cluster (ray://)"
         )
     # Workers start before the progress bar's thread (forking a threaded process is
     # unsafe). Until the report, stdout is stderr: Ray prints its workers' deaths to stdout.

@@ -10,13 +10,20 @@ from typing import Annotated
 import typer
 
 from aeroexec.cli.app import app, error_line, guarded
-from aeroexec.cli.replay_cmd import FormatOption, OutputFormat
+from aeroexec.cli.command import Typer
+from aeroexec.cli.options import output_option
+from aeroexec.cli.replay_cmd import OutputFormat, report_format_option
 from aeroexec.errors import Mark, ReportError
 from aeroexec.replay.merge import merge_shards, read_shard
 from aeroexec.replay.report import replay_json, replay_junit, replay_text
 
-report_app = typer.Typer(
-    help="Work with replay reports: merge the shards of a CI matrix into one.",
+report_app = Typer(
+    help=(
+        "Work with replay reports: merge the shards of a CI matrix into one.\n\n"
+        "\b\n"
+        "Example:\n"
+        "  aeroexec report merge shard-*.json --check -f junit -o replay.xml"
+    ),
     no_args_is_help=True,
     rich_markup_mode=None,
 )
@@ -50,16 +57,13 @@ def merge(
     shards: Annotated[
         list[str],
         typer.Argument(
-            metavar="FILE...",
+            metavar="REPORT...",
             help="The JSON reports of every shard (`aeroexec replay --shard K/N --format json`).",
             show_default=False,
         ),
     ],
-    output_format: FormatOption = OutputFormat.text,
-    output: Annotated[
-        str | None,
-        typer.Option("--output", "-o", metavar="FILE", help="Write the report here (else stdout)."),
-    ] = None,
+    output_format: OutputFormat = report_format_option(),
+    output: str | None = output_option("Write the report here (default: standard output)."),
     check: Annotated[
         bool,
         typer.Option("--check", help="Exit 1 when any replay differs from its recording."),

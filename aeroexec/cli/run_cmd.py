@@ -2,12 +2,28 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.options import (
+    Color,
+    catalog_option,
+    color_option,
+    debug_option,
+    deprecated_option,
+    output_option,
+    quiet_option,
+    replaced,
+    seed_option,
+    use_color,
+    world_option,
+)
 from aeroexec.cli.project import (
     AllowUnimplementedOption,
     BehaviorsOption,
@@ -48,7 +64,17 @@ def print_fault(time_ns: int, fault: str) -> None:
     typer.echo(f"[{time_ns / NS_PER_S:7.1f} s] {what}")
 
 
-def print_summary(result: SessionResult, clock: str = "simulated") -> None:
+@contextlib.contextmanager
+def silenced(quiet: bool) -> Iterator[None]:
+    """With -q, what the mission script prints goes nowhere (its errors still do)."""
+    if not quiet:
+        yield
+        return
+    with open(os.devnull, "w", encoding="utf-8") as nowhere, contextlib.redirect_stdout(nowhere):
+        yield
+
+
+def print_summary(result: SessionResult, clock: str = "simulated", styled: bool = False) -> None:
     """The summary table and one line of totals; `clock` says whose seconds they are."""
     rows = [
         [
@@ -66,6 +92,7 @@ def print_summary(result: SessionResult, clock: str = "simulated") -> None:
         "Behaviors",
         ["#", "behavior", "arguments", "result", "start s", "end s", "took s"],
         rows,
+        styled=styled,
     )
     achieved = sum(a.end_code == "GOAL_ACHIEVED" for a in result.activations)
     rejected = sum(not a.accepted for a in result.activations)
@@ -85,21 +112,15 @@ def run(
     mission: Path = typer.Argument(
         ..., metavar="MISSION", help="Mission script (Python, defines runMission())."
     ),
-    catalog: Path | None = typer.Option(
-        None,
-        "--catalog",
-        "-c",
-        help="Behavior catalog (YAML); default: the project's, else the bundled default.",
+    catalog: Path | None = catalog_option(
+        "Behavior catalog (YAML); default: the project's, else the bundled default."
     ),
-    seed: int | None = typer.Option(
-        None, "--seed", help="Seed for the simulator's random failures (default: 0)."
+    seed: int | None = seed_option(),
+    world: Path | None = world_option(
+        "World file (markers, failures); default: the project's, else the built-in world."
     ),
-    world: Path | None = typer.Option(
-        None, "--world", help="World file (markers, failures); default: built-in world."
-    ),
-    record: Path | None = typer.Option(
-        None, "--record", "-r", help="Record the session to this MCAP file."
-    ),
+    output: Path | None = output_option("Record the session to this MCAP file."),
+    record: Path | None = deprecated_option("--record", "-r", instead="-o/--output"),
     behaviors: BehaviorsOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
     max_sim_time: float = typer.Option(
@@ -109,15 +130,17 @@ def run(
         min=0.0,
         help="Stop a mission that is still running after this much simulated time "
         "(default: 24 h; 0: no limit). Recorded as the reason the session ended.",
+        show_default=False,
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only the summary."),
-    debug: bool = typer.Option(False, "--debug", help="Show the traceback if the mission raises."),
+    quiet: bool = quiet_option(),
+    debug: bool = debug_option(),
+    color: Color = color_option(),
 ) -> None:
     """Run MISSION in simulation: print each behavior as it starts and ends, then a summary.
 
     Example:
 
-        aeroexec run missions/appendix_c.py --record flight.mcap
+        aeroexec run missions/appendix_c.py -o flight.mcap
 
     Behaviors come from -b/--behaviors, the project's [tool.aeroexec] table (nearest
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
@@ -129,20 +152,22 @@ def run(
     configuration, behaviors) could not be used, a catalog behavior has no implementation,
     or the recording could not be written; 128+N when stopped by signal N.
     """
+    output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
     settings = project()
     config = SessionConfig(
         mission=mission,
         catalog=catalog_path(catalog, settings, DEFAULT_CATALOG),
         seed=first(seed, settings.seed, 0),
         world=first(world, settings.world, None),
-        record=record,
+        record=output,
         behaviors=project_behaviors(behaviors, settings),
         allow_unimplemented=allow_unimplemented,
         max_sim_time_s=max_sim_time or None,
     )
     printer = [] if quiet else [ActivityLog(on_change=print_row, on_fault=print_fault)]
-    result = simulate(config, observers=printer, announce=error_line)
-    print_summary(result)
+    with silenced(quiet):
+        result = simulate(config, observers=printer, announce=error_line)
+    print_summary(result, styled=use_color(color))
     finish(result, debug)
 
 

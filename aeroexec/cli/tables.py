@@ -1,17 +1,15 @@
-"""Tables for terminal output: rich on a terminal, plain aligned text otherwise.
+"""Tables for terminal output: rich when styled (`--color`), plain aligned text otherwise.
 
 Plain text keeps output stable for pipes, logs and tests.
 """
 
 from __future__ import annotations
 
-import sys
-
 import typer
 
 
-def print_table(title: str, headers: list[str], rows: list[list[str]]) -> None:
-    if sys.stdout.isatty():
+def print_table(title: str, headers: list[str], rows: list[list[str]], styled: bool) -> None:
+    if styled:
         from rich.console import Console
         from rich.table import Table
 
@@ -20,7 +18,8 @@ def print_table(title: str, headers: list[str], rows: list[list[str]]) -> None:
             table.add_column(header)
         for row in rows:
             table.add_row(*row)
-        Console().print(table)
+        # force_terminal: `--color always` styles a pipe too.
+        Console(force_terminal=True).print(table)
         return
     widths = [
         max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(headers)

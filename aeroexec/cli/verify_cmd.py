@@ -2,19 +2,28 @@
 
 from __future__ import annotations
 
-import os
-import sys
+import json
+from enum import Enum
 
 import typer
 
 from aeroexec.catalog.model import Severity
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.options import (
+    Color,
+    choices,
+    color_option,
+    format_option,
+    mission_option,
+    use_color,
+    world_option,
+)
 from aeroexec.cli.project import BehaviorsOption, first, project, project_behaviors
 from aeroexec.errors import AeroexecError
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
-from aeroexec.verifier.registry import get, suggest_code
-from aeroexec.verifier.report import FORMATS, render
+from aeroexec.verifier.registry import all_rules, get, suggest_code
+from aeroexec.verifier.report import render
 
 HELP = """Check behavior catalogs and mission scripts offline, before they fly.
 
@@ -41,10 +50,11 @@ real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catal
 Examples:
   aeroexec verify catalog/default.yaml
   aeroexec verify catalog/*.yaml --mission 'missions/*.py' --witness
-  aeroexec verify config/mission/behavior_catalog.yaml   # a 2020-2021 task catalog
+  aeroexec verify config/mission/behavior_catalog.yaml  # 2020-2021 tasks
   aeroexec verify catalog/default.yaml -m mission.py --world worlds/field.yaml
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
   aeroexec verify my-catalog.yaml -b mybehaviors
+  aeroexec verify --list-rules
   aeroexec verify --explain AX304
 
 \b
@@ -53,54 +63,65 @@ Exit codes: 0 no errors; 1 errors (or warnings with --strict);
 """
 
 
-def _use_color(choice: str | None) -> bool:
-    if choice is not None:
-        return choice == "always"
-    if os.environ.get("NO_COLOR"):
-        return False
-    return sys.stdout.isatty()
+class VerifyFormat(str, Enum):
+    text = "text"
+    json = "json"
+    sarif = "sarif"
+    github = "github"
+
+
+class Level(str, Enum):
+    info = "info"
+    warning = "warning"
+    error = "error"
 
 
 @app.command("verify", help=HELP)
 @guarded
 def verify_command(
     catalogs: list[str] = typer.Argument(
-        None, metavar="CATALOG...", help="Catalog files (YAML); glob patterns allowed."
-    ),
-    mission: list[str] = typer.Option(
-        [],
-        "--mission",
-        "-m",
-        metavar="PATH",
-        help="Mission script or glob (repeatable); checked against every catalog.",
-    ),
-    output_format: str = typer.Option(
-        "text", "--format", "-f", metavar="FORMAT", help="text, json, sarif or github."
-    ),
-    world: str | None = typer.Option(
         None,
-        "--world",
-        "-w",
-        metavar="FILE",
-        help="World file whose vehicle limits the reach checks use (default: built-in).",
+        metavar="CATALOG...",
+        help="Catalog files (YAML); glob patterns allowed. Default: the project's catalog.",
+        show_default=False,
+    ),
+    mission: list[str] = mission_option(
+        "Mission script or glob (repeatable); checked against every catalog.", repeatable=True
+    ),
+    output_format: VerifyFormat = format_option(
+        VerifyFormat,
+        "text: compiler-style lines; json; sarif (SARIF 2.1.0, for code scanning); "
+        "github (workflow annotations).",
+    ),
+    world: str | None = world_option(
+        "World file whose vehicle limits the reach checks use (default: built-in)."
     ),
     strict: bool = typer.Option(False, "--strict", help="Exit 1 on warnings too."),
     witness: bool = typer.Option(
         False, "--witness", help="Print each finding's witness activation sequence."
     ),
-    min_severity: str | None = typer.Option(
+    min_severity: Level | None = typer.Option(
         None,
         "--min-severity",
-        metavar="LEVEL",
-        help="Show findings from this level up: info, warning or error "
-        "(default: warning for text and github, info for json and sarif).",
+        metavar=choices(Level),
+        help="Show findings from this level up (default: warning for text and github, info "
+        "for json and sarif).",
+        show_default=False,
     ),
     explain: str | None = typer.Option(
-        None, "--explain", metavar="CODE", help="Print a rule's documentation and exit."
+        None,
+        "--explain",
+        metavar="CODE",
+        help="Print a rule's documentation and exit.",
+        show_default=False,
     ),
-    color: str | None = typer.Option(
-        None, "--color", metavar="WHEN", help="always or never (default: on a terminal)."
+    list_rules: bool = typer.Option(
+        False,
+        "--list-rules",
+        help="List every rule (code, severity, name, by area) and exit; with -f json, "
+        "their documentation too.",
     ),
+    color: Color = color_option(),
     behaviors: BehaviorsOption = None,
 ) -> None:
     if explain is not None:
@@ -109,16 +130,14 @@ def verify_command(
             raise AeroexecError(f"unknown rule code {explain!r}{suggest_code(explain)}")
         typer.echo(rule.explain())
         return
-    if output_format not in FORMATS:
-        raise AeroexecError(f"unknown format {output_format!r} (formats: {', '.join(FORMATS)})")
+    if list_rules:
+        typer.echo(rules_listing(output_format), nl=False)
+        return
+    fmt = output_format.value
     if min_severity is None:
-        min_severity = "info" if output_format in ("json", "sarif") else "warning"
-    try:
-        threshold = Severity(min_severity)
-    except ValueError:
-        raise AeroexecError(f"unknown severity {min_severity!r} (info, warning or error)") from None
-    if color not in (None, "always", "never"):
-        raise AeroexecError(f"--color takes always or never, got {color!r}")
+        threshold = Severity.INFO if fmt in ("json", "sarif") else Severity.WARNING
+    else:
+        threshold = Severity(min_severity.value)
     settings = project()
     if not catalogs and settings.catalog is not None:
         catalogs = [str(settings.catalog)]
@@ -129,10 +148,42 @@ def verify_command(
     limits = load_world(world_path) if world_path is not None else None
     report = verify(catalogs, mission, world=limits, behaviors=found if found.declared else None)
     shown = report.at_least(threshold)
-    use_color = _use_color(color)
-    text = render(shown, output_format, witness=witness, color=use_color)
-    typer.echo(text, nl=False, color=use_color)
+    styled = use_color(color)
+    text = render(shown, fmt, witness=witness, color=styled)
+    typer.echo(text, nl=False, color=styled)
     for error in report.input_errors:
         error_line(str(error))
     # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))
+
+
+def rules_listing(output_format: VerifyFormat) -> str:
+    """Every rule of the registry: by area as text, or as JSON with its documentation."""
+    rules = all_rules()
+    if output_format is VerifyFormat.json:
+        listing = [
+            {
+                "code": rule.code,
+                "name": rule.name,
+                "severity": rule.severity.value if rule.severity else None,
+                "area": rule.area,
+                "kind": rule.kind,
+                "witness": rule.witness,
+                "doc": rule.doc,
+            }
+            for rule in rules
+        ]
+        return json.dumps({"rules": listing}, indent=2) + "\n"
+    if output_format is not VerifyFormat.text:
+        raise AeroexecError(f"--list-rules prints text or json, not {output_format.value}")
+    lines: list[str] = []
+    area = None
+    for rule in rules:
+        if rule.area != area:
+            area = rule.area
+            lines += [""] if lines else []
+            lines.append(area)
+        severity = rule.severity.value if rule.severity else "varies"
+        lines.append(f"  {rule.code}  {severity:<7}  {rule.name}")
+    lines += ["", f"{len(rules)} rules; `aeroexec verify --explain CODE` documents one."]
+    return "\n".join(lines) + "\n"

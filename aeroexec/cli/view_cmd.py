@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.app import app, error_line, guarded, say
+from aeroexec.cli.options import allow_remote_option, deprecated_option, output_option, replaced
 from aeroexec.errors import AeroexecError
 from aeroexec.viz.viewer import DEFAULT_WEB_PORT
 
@@ -64,25 +65,20 @@ def view(
     other: Annotated[
         Path | None,
         typer.Argument(
-            metavar="[REC2]",
+            metavar="REC2",
             help="A second recording, shown beside REC (e.g. its replay) on the same sim_time.",
             show_default=False,
         ),
     ] = None,
-    save: Annotated[
-        Path | None,
-        typer.Option(
-            "--save",
-            metavar="OUT.rrd",
-            help="Write the Rerun file here (default: <REC stem>.rrd next to REC).",
-            show_default=False,
-        ),
-    ] = None,
+    output: Path | None = output_option(
+        "Write the Rerun file (.rrd) here (default: <REC stem>.rrd next to REC)."
+    ),
+    save: Path | None = deprecated_option("--save", instead="-o/--output"),
     spawn: Annotated[
         bool | None,
         typer.Option(
             "--spawn/--no-spawn",
-            help="Open the Rerun viewer on the result (default: yes unless --save is given).",
+            help="Open the Rerun viewer on the result (default: yes unless -o is given).",
             show_default=False,
         ),
     ] = None,
@@ -105,14 +101,9 @@ def view(
             show_default=False,
         ),
     ] = None,
-    allow_remote: Annotated[
-        bool,
-        typer.Option(
-            "--allow-remote",
-            help="Serve the web viewer on every network interface, not only this machine "
-            "(127.0.0.1).",
-        ),
-    ] = False,
+    allow_remote: bool = allow_remote_option(
+        "Serve the web viewer on every network interface, not only this machine (127.0.0.1)."
+    ),
 ) -> None:
     """Show a session in Rerun: the flight in 3D (world markers, vehicle pose, trajectory),
     one lane per behavior with each activation, capability reference counts, and the
@@ -123,7 +114,7 @@ def view(
     a base run and its replay under a new catalog, say. A ROS 1 bag is imported first
     (the shipped Aerostack mapping; `aeroexec import --mapping` for others).
 
-    The Rerun file is written to --save, or next to REC (<REC stem>.rrd; two recordings:
+    The Rerun file is written to -o/--output, or next to REC (<REC stem>.rrd; two recordings:
     <REC stem>_vs_<REC2 stem>.rrd). The viewer opens on it when it can run (the rerun
     binary of rerun-sdk and a display); otherwise the command says so and where the file
     is. Open it later with `rerun FILE.rrd`. --web serves the web viewer on
@@ -132,7 +123,7 @@ def view(
     \b
     Examples:
       aeroexec view flight.mcap
-      aeroexec view base.mcap replay.mcap --save diff.rrd
+      aeroexec view base.mcap replay.mcap -o diff.rrd
       aeroexec view flight.bag --web --port 9091
 
     Exit codes: 0 written (and viewer started when asked); 1 the web viewer failed while
@@ -140,9 +131,12 @@ def view(
     readable), the file not written or the web viewer's port taken; 128+N stopped by
     signal N (the web viewer with it).
     """
+    output = replaced(output, save, new_name="-o/--output", old_name="--save")
     if not web and (port is not None or allow_remote):
         raise AeroexecError("--port and --allow-remote are for the web viewer: add --web")
-    output = save if save is not None else _default_output(recording, other)
+    chosen = output is not None
+    if output is None:
+        output = _default_output(recording, other)
     inputs = [recording] if other is None else [recording, other]
 
     from aeroexec.viz import viewer
@@ -151,14 +145,12 @@ def view(
     report = write_view(inputs, output, progress=_progress)
     _summary(report)
     typer.echo(f"wrote {report.output}")
-    want_viewer = web or (spawn if spawn is not None else save is None)
+    want_viewer = web or (spawn if spawn is not None else not chosen)
     if not want_viewer:
         return
     reason = viewer.cannot_spawn(web=web)
     if reason is not None:
-        error_line(
-            f"aeroexec: viewer not started: {reason}. Open the file with `rerun {report.output}`"
-        )
+        say("note", f"viewer not started: {reason}. Open the file with `rerun {report.output}`")
         return
     if not web:
         typer.echo("opening the Rerun viewer")
@@ -171,5 +163,5 @@ def view(
         on_ready=lambda url, _pid: typer.echo(f"serving the web viewer at {url} (Ctrl-C to stop)"),
     )
     if status != 0:
-        error_line(f"aeroexec: error: the web viewer ended with exit status {status}")
+        say("error", f"the web viewer ended with exit status {status}")
         raise typer.Exit(1)

@@ -1,6 +1,6 @@
 """The Behavior Coordinator: `activate_behavior`, `inhibit_behavior`, the active set.
 
-Activation (Algorithm 3.5, with design.md's repairs), in order:
+Activation (Algorithm 3.5 with docs/design.md#the-repairs-of-the-thesis), in order:
 unknown behavior -> format check -> situation -> consistency (who must be preempted)
 -> capability check *as if* the victims were gone -> preempt victims (`INTERRUPTED`)
 -> default values -> start. Every rejection happens before the first change, so a

@@ -602,10 +602,14 @@ class MavSim:
         return (vx, vy, vz)
 
     # -- reporting -----------------------------------------------------------------------
-    def stats(self) -> dict[str, Any]:
+    def stats(self, tail: bool = False) -> dict[str, Any]:
+        """Message counts by type and the final state; with `tail`, the last packets sent."""
         state = self.sim.state()
+        counts = self.link.stats.as_dict()
+        if not tail:
+            del counts["tail"]
         return {
-            **self.link.stats.as_dict(),
+            **counts,
             "dropped_heartbeats": self.counters.dropped_heartbeats,
             "ignored_setpoints": self.counters.ignored_setpoints,
             "setpoints": dict(self.counters.setpoints),
@@ -620,8 +624,8 @@ class MavSim:
             "elapsed_s": round(self.elapsed, 3),
         }
 
-    def write_stats(self, path: str | Path) -> None:
-        text = json.dumps(self.stats(), indent=2, sort_keys=True) + "\n"
+    def write_stats(self, path: str | Path, tail: bool = False) -> None:
+        text = json.dumps(self.stats(tail), indent=2, sort_keys=True) + "\n"
         if str(path) == "-":
             print(text, end="")
         else:

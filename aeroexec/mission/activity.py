@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
+from aeroexec.display import shown_arguments
 from aeroexec.executive.clock import NS_PER_S
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 
@@ -42,16 +43,7 @@ class Activation:
         return self.end_code or "RUNNING"
 
 
-def format_arguments(arguments: dict[str, Any]) -> str:
-    return " ".join(f"{k}={_compact(v)}" for k, v in arguments.items())
-
-
-def _compact(value: Any) -> str:
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_compact(v) for v in value) + "]"
-    if isinstance(value, float) and value.is_integer():
-        return str(int(value))
-    return str(value)
+format_arguments = shown_arguments
 
 
 class ActivityLog:

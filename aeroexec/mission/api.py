@@ -20,6 +20,7 @@ inputs, which replay feeds back.
 from __future__ import annotations
 
 import types
+from collections.abc import Callable
 from typing import Any
 
 from aeroexec.errors import MissionError
@@ -35,7 +36,23 @@ REFUSED = "ERROR"
 DEFAULT_WAIT_S = 3600.0
 
 
+Spelling = Callable[[str], str]
+
+
+def _snake(name: str) -> str:
+    return name
+
+
+def _camel(name: str) -> str:
+    """`activate_behavior` as the thesis' missions spell it: `activateBehavior`."""
+    head, *rest = name.split("_")
+    return head + "".join(part.capitalize() for part in rest)
+
+
 class MissionAPI:
+    """Each function in both spellings; a message names the API in the spelling the
+    mission used (`executeBehavior` is told to use `activateBehavior`)."""
+
     def __init__(self, executive: Executive, max_wait_s: float = DEFAULT_WAIT_S) -> None:
         self.executive = executive
         self.max_wait_s = max_wait_s
@@ -53,12 +70,18 @@ class MissionAPI:
 
     # -- behaviors -----------------------------------------------------------------------
     def execute_behavior(self, name: str, **arguments: Any) -> str:
+        return self._execute(name, arguments, _snake)
+
+    def executeBehavior(self, name: str, **arguments: Any) -> str:
+        return self._execute(name, arguments, _camel)
+
+    def _execute(self, name: str, arguments: dict[str, Any], spell: Spelling) -> str:
         self._command("execute_behavior", behavior=name, arguments=arguments)
         descriptor = self.executive.catalog.behaviors.get(name)
         if descriptor is not None and descriptor.recurrent:
             raise MissionError(
-                f"execute_behavior('{name}'): {name} is recurrent and would never return; "
-                "use activate_behavior and inhibit_behavior"
+                f"{spell('execute_behavior')}('{name}'): {name} is recurrent and would never "
+                f"return; use {spell('activate_behavior')} and {spell('inhibit_behavior')}"
             )
         result = self.executive.activate_behavior(name, arguments)
         if not result.ok:
@@ -71,7 +94,7 @@ class MissionAPI:
         finished = self.executive.run_until(lambda: uid in self._ended, timeout + 1.0)
         if not finished:
             raise MissionError(
-                f"execute_behavior('{name}'): no event after {timeout + 1.0:g} s "
+                f"{spell('execute_behavior')}('{name}'): no event after {timeout + 1.0:g} s "
                 f"(clock at {self.executive.clock.now_ns() / NS_PER_S:.1f} s)"
             )
         self._last_error = ""
@@ -95,37 +118,53 @@ class MissionAPI:
 
     # -- beliefs -------------------------------------------------------------------------
     def consult_belief(self, query: str) -> tuple[bool, dict[str, Any]]:
+        return self._consult(query, "consult_belief")
+
+    def consultBelief(self, query: str) -> tuple[bool, dict[str, Any]]:
+        return self._consult(query, "consultBelief")
+
+    def true_belief(self, query: str) -> bool:
+        return self._consult(query, "true_belief")[0]
+
+    def trueBelief(self, query: str) -> bool:
+        return self._consult(query, "trueBelief")[0]
+
+    def _consult(self, query: str, called: str) -> tuple[bool, dict[str, Any]]:
         self._command("consult_belief", query=query)
         try:
             return self.executive.beliefs.query(query)
         except BeliefSyntaxError as exc:
-            raise MissionError(f"consult_belief: {exc.message}") from None
-
-    def true_belief(self, query: str) -> bool:
-        return self.consult_belief(query)[0]
+            raise MissionError(f"{called}: {exc.message}") from None
 
     def add_belief(self, belief: str) -> bool:
+        return self._add(belief, "add_belief")
+
+    def addBelief(self, belief: str) -> bool:
+        return self._add(belief, "addBelief")
+
+    def _add(self, belief: str, called: str) -> bool:
         self._command("add_belief", belief=belief)
         try:
             return self.executive.beliefs.add(belief)
         except BeliefSyntaxError as exc:
-            raise MissionError(f"add_belief: {exc.message}") from None
+            raise MissionError(f"{called}: {exc.message}") from None
 
     def remove_belief(self, belief: str) -> bool:
+        return self._remove(belief, "remove_belief")
+
+    def removeBelief(self, belief: str) -> bool:
+        return self._remove(belief, "removeBelief")
+
+    def _remove(self, belief: str, called: str) -> bool:
         self._command("remove_belief", belief=belief)
         try:
             return self.executive.beliefs.remove(belief)
         except BeliefSyntaxError as exc:
-            raise MissionError(f"remove_belief: {exc.message}") from None
+            raise MissionError(f"{called}: {exc.message}") from None
 
-    # The thesis' spelling.
-    executeBehavior = execute_behavior
+    # The thesis' spelling of the rest (their messages name no other function).
     activateBehavior = activate_behavior
     inhibitBehavior = inhibit_behavior
-    consultBelief = consult_belief
-    trueBelief = true_belief
-    addBelief = add_belief
-    removeBelief = remove_belief
     lastError = last_error
 
     def as_module(self) -> types.ModuleType:

@@ -258,7 +258,7 @@ class Recorder:
         self.flush_messages = flush_messages
         self.flush_interval_ns = flush_interval_ns
         try:
-            # `--record out/flight.mcap` should just work, as an output path does in make.
+            # `-o out/flight.mcap` should just work, as an output path does in make.
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._stream: IO[bytes] = open(self.path, "wb")  # noqa: SIM115 (closed by close())
         except OSError as exc:

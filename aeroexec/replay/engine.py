@@ -231,7 +231,7 @@ def _mode_name(options: ReplayOptions) -> str | None:
 
 
 def output_for(recording: str, out_dir: str) -> str:
-    """Where `--out-dir` writes the replay of `recording` (a bag's replay is an MCAP)."""
+    """Where `--output-dir` writes the replay of `recording` (a bag's replay is an MCAP)."""
     return str(Path(out_dir) / (Path(recording).stem + ".mcap"))
 
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from aeroexec.display import shown_arguments
+
 NS_PER_S = 1_000_000_000
 
 #: Mission commands that activate a behavior.
@@ -78,7 +80,8 @@ class CommandOutcome:
 
     @property
     def label(self) -> str:
-        """`#4 GO_TO_POINT [3, 5.5, 1.3]`: what a reviewer recognizes in the mission."""
+        """`#4 GO_TO_POINT coordinates=[3, 5.5, 1.3]`: what a reviewer recognizes in the
+        mission, its arguments spelled as `aeroexec run` prints them."""
         return f"#{self.index} {describe_command(self)}"
 
 
@@ -134,24 +137,8 @@ class RunOutcome:
         return (self.end_ns - self.start_ns) / NS_PER_S
 
 
-def compact(value: Any) -> str:
-    """3, 5.5, [0, 0, 1.41]: numbers as a person writes them."""
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(compact(v) for v in value) + "]"
-    if isinstance(value, float) and value.is_integer():
-        return str(int(value))
-    if isinstance(value, bool) or value is None:
-        return str(value).lower()
-    return str(value)
-
-
-def describe_arguments(arguments: dict[str, Any]) -> str:
-    """One argument: its value (`[3, 5.5, 1.3]`); several: `name=value` pairs."""
-    if not arguments:
-        return ""
-    if len(arguments) == 1:
-        return compact(next(iter(arguments.values())))
-    return " ".join(f"{k}={compact(v)}" for k, v in arguments.items())
+#: `count=2 coordinates=[3, 5.5, 1.3]`: as `aeroexec run` prints them.
+describe_arguments = shown_arguments
 
 
 def describe_command(command: CommandOutcome) -> str:

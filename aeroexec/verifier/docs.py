@@ -45,7 +45,8 @@ INTRO = """\
 # aeroexec verify: rules
 
 Generated from the rule registry (`python -m aeroexec.verifier.docs > docs/rules.md`);
-do not edit by hand. `aeroexec verify --explain CODE` prints the same text.
+do not edit by hand. `aeroexec verify --list-rules` lists them, `aeroexec verify --explain
+CODE` prints the same text.
 
 Codes by range: AX1xx are reported by the catalog loader and passed through by the
 verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility;

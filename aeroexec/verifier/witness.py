@@ -1,8 +1,8 @@
 """Witnesses: the shortest activation sequences that make a finding happen.
 
 `ActivationModel` is the executive's activation semantics reduced to sets
-(design.md section 2): initiation references the default capabilities (with the ones
-they require) and fails if two of them conflict or one cannot be expanded; activating
+(docs/design.md#activation): initiation references the default capabilities (with the
+ones they require) and fails if two of them conflict or one cannot be expanded; activating
 B is rejected if B is unknown, if one of its capabilities
 (expanded with the capabilities they require) is undefined or requires itself, or if
 one of its not-yet-referenced capabilities conflicts with another of them or with a
