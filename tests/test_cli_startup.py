@@ -96,3 +96,10 @@ def test_unknown_command_is_suggested_without_loading_everything() -> None:
     result = CliRunner().invoke(app, ["verfy"])
     assert result.exit_code == 2
     assert "(did you mean 'verify'?)" in result.output
+
+
+def test_the_behaviors_record_has_one_name() -> None:
+    from aeroexec.plugins.manifest import METADATA_NAME
+    from aeroexec.recording.schemas import CODE_METADATA_NAME
+
+    assert METADATA_NAME == CODE_METADATA_NAME

@@ -22,11 +22,11 @@ from dataclasses import dataclass
 
 from aeroexec.catalog.model import Catalog
 from aeroexec.plugins.discovery import BehaviorSet, Implementation
-from aeroexec.recording.schemas import CODE_METADATA_NAME
 
-#: The metadata record's name (the recording profile's), and the prefix of the source
-#: attachments.
-METADATA_NAME = CODE_METADATA_NAME
+#: The metadata record's name (`aeroexec.recording.schemas.CODE_METADATA_NAME`, spelled
+#: out here so that verify, which reads no recording, does not load the recording
+#: package; a test holds the two equal), and the prefix of the source attachments.
+METADATA_NAME = "behaviors"
 ATTACHMENT_PREFIX = "behaviors/"
 STAND_IN_PREFIX = "stand-in "
 _DIGEST = "sha256:"
