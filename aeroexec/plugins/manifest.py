@@ -22,11 +22,9 @@ from dataclasses import dataclass
 
 from aeroexec.catalog.model import Catalog
 from aeroexec.plugins.discovery import BehaviorSet, Implementation
-from aeroexec.recording.schemas import CODE_METADATA_NAME
 
-#: The metadata record's name (the recording profile's), and the prefix of the source
-#: attachments.
-METADATA_NAME = CODE_METADATA_NAME
+#: The metadata record's name, and the prefix of the source attachments.
+METADATA_NAME = "behaviors"
 ATTACHMENT_PREFIX = "behaviors/"
 STAND_IN_PREFIX = "stand-in "
 _DIGEST = "sha256:"
