@@ -194,11 +194,15 @@ class CatalogGraphs:
         """Per good capability: it and everything it requires, required ones first."""
         import networkx as nx
 
-        # Good capabilities require only good ones, so without the broken ones the
-        # graph is acyclic. (A view hiding nodes keeps the graph's own order.)
-        good = nx.restricted_view(self.requires_graph, self.broken_capabilities, ())
+        broken = self.broken_capabilities
         closures: dict[str, tuple[str, ...]] = {}
-        for name in reversed(list(nx.topological_sort(good))):
+        # A depth-first postorder lists a node after every node it points to, except
+        # along an edge closing a cycle; a good capability requires only good ones and is
+        # on no cycle, so in the postorder its requirements come first. (Cheaper than a
+        # topological sort of a view that hides the broken ones.)
+        for name in nx.dfs_postorder_nodes(self.requires_graph):
+            if name in broken:
+                continue
             required = self.catalog.capabilities[name].required_capabilities
             if not required:
                 closures[name] = (name,)
