@@ -3,10 +3,11 @@
 Everything is computed lazily and once per catalog, in time linear in the catalog (plus
 the size of the answers): rules never loop over all pairs of behaviors.
 
-The rules work on `digraph.Digraph`s (`requires`, `start_order`,
-`asymmetric_preemption_digraph`) and pair lists (`conflict_pairs`), with iterative
-linear algorithms; networkx views of the same graphs are built on request (networkx is
-imported then, never on the rules' path):
+Graphs are networkx graphs, built on first use (networkx is imported then: only the
+rules that ask a graph question pay for it, and no command but `verify` does); their
+questions (strongly connected sets, reachability, shortest cycles, dependency order)
+are networkx algorithms (`aeroexec.verifier.cycles`). Pair questions that need no graph
+use `conflict_pairs`, the declared pairs in file order.
 
 * `conflict_graph` — undirected, capabilities, an edge per declared
   `incompatible_capabilities` pair (symmetric, as the executive reads it);
@@ -25,10 +26,9 @@ imported then, never on the rules' path):
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
-from itertools import pairwise
 from typing import TYPE_CHECKING, Generic, TypeVar
 
 from aeroexec.behaviors import STANDARD_LIBRARY
@@ -42,15 +42,7 @@ from aeroexec.catalog.model import (
 from aeroexec.errors import Mark
 from aeroexec.executive.behavior import Behavior
 from aeroexec.vehicles.world import World, default_world
-from aeroexec.verifier.digraph import (
-    Digraph,
-    cyclic_components,
-    dependencies_first,
-    descendants,
-    shortest_cycle,
-)
-
-__all__ = ["CatalogGraphs", "Definition", "OrderEdge", "cycle_edges", "shortest_cycle"]
+from aeroexec.verifier.cycles import cyclic_components, reaching
 from aeroexec.verifier.findings import Finding, Witness
 from aeroexec.verifier.suggest import Suggester
 
@@ -60,7 +52,6 @@ if TYPE_CHECKING:
     from aeroexec.verifier.witness import ActivationModel
 
 T = TypeVar("T", BehaviorDescriptor, BehaviorList, CapabilityDescriptor)
-N = TypeVar("N")
 
 #: Start-order graph nodes: ("capability", name) or ("process", name).
 Node = tuple[str, str]
@@ -162,24 +153,25 @@ class CatalogGraphs:
 
     # -- capability expansion (mirrors the specialist: required capabilities first) ------
     @cached_property
-    def requires(self) -> Digraph[str]:
-        """Capability -> each capability it requires."""
-        graph: Digraph[str] = Digraph()
-        for name, capability in self.catalog.capabilities.items():
-            graph.add_node(name)
-            for required in capability.required_capabilities:
-                graph.add_edge(name, required)
-        return graph
-
-    @cached_property
     def requires_graph(self) -> nx.DiGraph:
-        return self.requires.to_networkx()
+        """Capability -> each capability it requires (undefined ones included)."""
+        import networkx as nx
+
+        capabilities = self.catalog.capabilities
+        graph = nx.DiGraph()
+        graph.add_nodes_from(capabilities)
+        graph.add_edges_from(
+            (name, required)
+            for name, capability in capabilities.items()
+            for required in capability.required_capabilities
+        )
+        return graph
 
     @cached_property
     def requires_cycles(self) -> tuple[frozenset[str], ...]:
         """Strongly connected sets of capabilities that require each other (self-loops
         included), in catalog order."""
-        found = [frozenset(scc) for scc in cyclic_components(self.requires)]
+        found = [frozenset(scc) for scc in cyclic_components(self.requires_graph)]
         order = self.capability_order
         return tuple(sorted(found, key=lambda s: min(order.get(n, len(order)) for n in s)))
 
@@ -191,25 +183,26 @@ class CatalogGraphs:
     def broken_capabilities(self) -> frozenset[str]:
         """Capabilities that cannot be expanded: undefined, in a requires-cycle, or
         requiring (transitively) one of those."""
-        graph = self.requires
+        graph = self.requires_graph
         bad = {n for n in graph if n not in self.catalog.capabilities}
         for scc in self.requires_cycles:
             bad |= scc
-        if not bad:
-            return frozenset()
-        reverse = graph.reverse()
-        broken = set(bad)
-        for node in bad:
-            broken |= descendants(reverse, node)
-        return frozenset(broken)
+        return frozenset(reaching(graph, bad))
 
     @cached_property
     def _closures(self) -> dict[str, tuple[str, ...]]:
         """Per good capability: it and everything it requires, required ones first."""
-        graph = self.requires
+        import networkx as nx
+
         broken = self.broken_capabilities
         closures: dict[str, tuple[str, ...]] = {}
-        for name in dependencies_first(graph, (n for n in graph if n not in broken)):
+        # A depth-first postorder lists a node after every node it points to, except
+        # along an edge closing a cycle; a good capability requires only good ones and is
+        # on no cycle, so in the postorder its requirements come first. (Cheaper than a
+        # topological sort of a view that hides the broken ones.)
+        for name in nx.dfs_postorder_nodes(self.requires_graph):
+            if name in broken:
+                continue
             required = self.catalog.capabilities[name].required_capabilities
             if not required:
                 closures[name] = (name,)
@@ -309,12 +302,12 @@ class CatalogGraphs:
 
     @cached_property
     def conflict_graph(self) -> nx.Graph:
-        graph: Digraph[str] = Digraph()
-        for name in self.catalog.capabilities:
-            graph.add_node(name)
-        for a, b in self.conflict_pairs:
-            graph.add_edge(a, b)
-        return graph.to_networkx(directed=False)
+        import networkx as nx
+
+        graph = nx.Graph()
+        graph.add_nodes_from(self.catalog.capabilities)
+        graph.add_edges_from(self.conflict_pairs)
+        return graph
 
     def conflict_mark(self, a: str, b: str) -> Mark:
         """Where the conflict a-b is declared (a's entry naming b, else b's naming a)."""
@@ -432,26 +425,30 @@ class CatalogGraphs:
         }
 
     @cached_property
-    def asymmetric_preemption_digraph(self) -> Digraph[str]:
-        graph: Digraph[str] = Digraph()
-        for a, victims in self.asymmetric_preemption.items():
-            for b in victims:
-                graph.add_edge(a, b)
+    def asymmetric_preemption_graph(self) -> nx.DiGraph:
+        """A -> B for each one-sided preemption; each node's edges in catalog order."""
+        import networkx as nx
+
+        graph = nx.DiGraph()
+        graph.add_edges_from(
+            (a, b) for a, victims in self.asymmetric_preemption.items() for b in victims
+        )
         return graph
 
     @cached_property
-    def asymmetric_preemption_graph(self) -> nx.DiGraph:
-        return self.asymmetric_preemption_digraph.to_networkx()
-
-    @cached_property
     def preemption_graph(self) -> nx.DiGraph:
-        graph: Digraph[str] = Digraph()
-        for name in self.catalog.behaviors:
-            graph.add_node(name)
-            for victim in self.catalog.preempted_by(name):
-                if victim in self.catalog.behaviors:
-                    graph.add_edge(name, victim)
-        return graph.to_networkx()
+        import networkx as nx
+
+        behaviors = self.catalog.behaviors
+        graph = nx.DiGraph()
+        graph.add_nodes_from(behaviors)
+        graph.add_edges_from(
+            (name, victim)
+            for name in behaviors
+            for victim in self.catalog.preempted_by(name)
+            if victim in behaviors
+        )
+        return graph
 
     @cached_property
     def incompatibility_graph(self) -> nx.Graph:
@@ -469,11 +466,6 @@ class CatalogGraphs:
     # -- start order ---------------------------------------------------------------------
     @cached_property
     def start_order_graph(self) -> nx.DiGraph:
-        """`start_order` as a networkx graph (edge attribute `why`)."""
-        return self.start_order.to_networkx(attribute="why")
-
-    @cached_property
-    def start_order(self) -> Digraph[Node]:
         """What must start before what. Nodes: ("process", p), and ("capability", C)
         meaning "C is up" (all its processes run). Edges carry `why`: the OrderEdges
         (catalog order) that impose them:
@@ -486,7 +478,12 @@ class CatalogGraphs:
         * a required capability is up before the first (not yet running) process of the
           capability that requires it.
         """
-        graph: Digraph[Node] = Digraph()
+        import networkx as nx
+
+        # Collected in plain dicts first (an edge is imposed again and again: appending
+        # to a list is cheaper than asking the graph), then given to networkx at once.
+        # Each node's successors keep the order the catalog imposed them in.
+        successors: dict[Node, dict[Node, list[OrderEdge]]] = {}
         capabilities = self.catalog.capabilities
         requires_scc: dict[str, frozenset[str]] = {}
         for scc in self.requires_cycles:
@@ -496,10 +493,11 @@ class CatalogGraphs:
         def add(u: Node, v: Node, why: OrderEdge) -> None:
             if u == v:
                 return
-            if graph.has_edge(u, v):
-                graph.edge(u, v).append(why)
+            imposed = successors.setdefault(u, {})
+            if v in imposed:
+                imposed[v].append(why)
             else:
-                graph.add_edge(u, v, [why])
+                imposed[v] = [why]
 
         unique_processes: dict[str, tuple[str, ...]] = {}
         up_with: dict[str, frozenset[str]] = {}
@@ -529,7 +527,6 @@ class CatalogGraphs:
 
         for name, spec in capabilities.items():
             up: Node = ("capability", name)
-            graph.add_node(up)
             previous: str | None = None
             for index, process in enumerate(spec.processes):
                 if process == previous or process in spec.processes[:index]:
@@ -595,6 +592,13 @@ class CatalogGraphs:
                     )
                 running |= running_after(capability)
                 earlier.append(capability)
+        graph = nx.DiGraph()
+        graph.add_nodes_from(("capability", name) for name in capabilities)
+        graph.add_edges_from(
+            (u, v, {"why": whys})
+            for u, targets in successors.items()
+            for v, whys in targets.items()
+        )
         return graph
 
     def node_order(self, node: Node) -> tuple[int, int, str]:
@@ -618,7 +622,3 @@ def _definitions(all_items: tuple[T, ...], effective: Mapping[str, T]) -> tuple[
         else:
             out.append(Definition(item, False, winner.mark.line))
     return tuple(out)
-
-
-def cycle_edges(cycle: list[N]) -> Iterator[tuple[N, N]]:
-    return pairwise(cycle)

@@ -13,15 +13,19 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 from aeroexec.catalog.model import Severity
 from aeroexec.catalog.tasks import ExecutionGoal, TaskBehavior, TaskCatalog
 from aeroexec.errors import Mark
-from aeroexec.verifier.digraph import Digraph, cyclic_components, shortest_cycle
+from aeroexec.verifier.cycles import cyclic_components, shortest_cycle
 from aeroexec.verifier.findings import Finding, Outcome, Step, Witness
 from aeroexec.verifier.registry import task_rule
 from aeroexec.verifier.suggest import Suggester
 from aeroexec.verifier.task_model import IDLE, TaskModel
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 E, W, INFO = Severity.ERROR, Severity.WARNING, Severity.INFO
 
@@ -78,17 +82,19 @@ class TaskContext:
                 yield behavior, index
 
     @cached_property
-    def requirement_graph(self) -> Digraph[str]:
+    def requirement_graph(self) -> nx.DiGraph:
         """Task -> task it needs (through any behavior performing it); each edge keeps
-        the first (behavior, requirement) that imposes it."""
-        graph: Digraph[str] = Digraph()
+        the first requirement that imposes it (edge attribute `requirement`)."""
+        import networkx as nx
+
+        graph = nx.DiGraph()
         for behavior in self.catalog.behaviors:
             if behavior.task is None:
                 continue
             graph.add_node(behavior.task)
             for requirement in behavior.requires:
                 if not graph.has_edge(behavior.task, requirement.task):
-                    graph.add_edge(behavior.task, requirement.task, requirement)
+                    graph.add_edge(behavior.task, requirement.task, requirement=requirement)
         return graph
 
 
@@ -359,7 +365,7 @@ def requirement_cycle(ctx: TaskContext) -> Iterator[Finding]:
     components.sort(key=lambda c: min(order.get(t, len(order)) for t in c))
     for component in components:
         cycle = shortest_cycle(graph, component, lambda t: order.get(t, len(order)))
-        first = graph.edge(cycle[0], cycle[1])
+        first = graph.edges[cycle[0], cycle[1]]["requirement"]
         yield ctx.finding(
             "AX819",
             E,

@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from aeroexec.catalog.model import Severity
-from aeroexec.verifier.digraph import cyclic_components
+from aeroexec.verifier.cycles import cycle_edges, cyclic_components, shortest_cycle
 from aeroexec.verifier.findings import Finding, Witness
-from aeroexec.verifier.graphs import CatalogGraphs, cycle_edges, shortest_cycle
+from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.registry import catalog_rule
 from aeroexec.verifier.witness import EMPTY, coexistence_witness
 
@@ -166,9 +166,9 @@ def _witness(graphs: CatalogGraphs, pairs: list[tuple[str, str]]) -> Witness | N
     or break the cycle.""",
 )
 def asymmetric_incompatibility_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    graph = graphs.asymmetric_preemption_digraph
-    if not graph.succ:
-        return
+    if not graphs.asymmetric_preemption:
+        return  # no edge, no cycle: the graph need not be built
+    graph = graphs.asymmetric_preemption_graph
     order = graphs.catalog.order_of
     components = [c for c in cyclic_components(graph) if len(c) > 1]
     components.sort(key=lambda c: min(order(n) for n in c))

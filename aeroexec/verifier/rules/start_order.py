@@ -6,15 +6,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 from aeroexec.catalog.model import Severity
-from aeroexec.verifier.digraph import cyclic_components, descendants
+from aeroexec.verifier.cycles import cycle_edges, cyclic_components, reaching, shortest_cycle
 from aeroexec.verifier.findings import Finding
-from aeroexec.verifier.graphs import (
-    CatalogGraphs,
-    OrderEdge,
-    cycle_edges,
-    node_label,
-    shortest_cycle,
-)
+from aeroexec.verifier.graphs import CatalogGraphs, OrderEdge, node_label
 from aeroexec.verifier.registry import catalog_rule
 from aeroexec.verifier.witness import rejection_witness
 
@@ -37,25 +31,19 @@ E, W = Severity.ERROR, Severity.WARNING
     imposing an edge of the cycle.""",
 )
 def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    graph = graphs.start_order
+    graph = graphs.start_order_graph
     components = [c for c in cyclic_components(graph) if len(c) > 1]
     components.sort(key=lambda c: min(graphs.node_order(n) for n in c))
     for component in components:
         cycle = shortest_cycle(graph, component, graphs.node_order)
-        reasons: list[OrderEdge] = [graph.edge(u, v)[0] for u, v in cycle_edges(cycle)]
+        reasons: list[OrderEdge] = [graph.edges[u, v]["why"][0] for u, v in cycle_edges(cycle)]
         shown = " -> ".join(node_label(n) for n in cycle)
         because = "; ".join(dict.fromkeys(r.reason for r in reasons if not r.implied))
         # Everyone imposing an edge inside the strongly connected set takes part, not
         # only those on the cycle shown (which depends on where the search starts).
+        inside = graph.subgraph(component)
         imposers = sorted(
-            {
-                why.by
-                for u in component
-                for v, whys in graph.succ[u].items()
-                if v in component
-                for why in whys
-                if not why.implied
-            }
+            {why.by for _, _, whys in inside.edges(data="why") for why in whys if not why.implied}
         )
         members = sorted(name for _, name in component)
         # The edge a behavior imposes is the most likely to be "the wrong one".
@@ -81,20 +69,17 @@ def start_order_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
     witness=True,
 )
 def required_capability_cycle(graphs: CatalogGraphs) -> Iterator[Finding]:
-    requires = graphs.requires
+    requires = graphs.requires_graph
     order = graphs.capability_order
-    reverse = requires.reverse()
     for component in graphs.requires_cycles:
         cycle = shortest_cycle(requires, component, lambda n: order.get(n, len(order)))
         first = graphs.catalog.capabilities[cycle[0]]
         index = first.required_capabilities.index(cycle[1])
-        reaching = set(component)
-        for node in component:
-            reaching |= descendants(reverse, node)
+        users = reaching(requires, component)
         affected = [
             b
             for b in graphs.catalog.behaviors
-            if any(c in reaching for c in graphs.catalog.behaviors[b].capabilities)
+            if any(c in users for c in graphs.catalog.behaviors[b].capabilities)
         ]
         if affected:
             consequence = f"; behaviors using them are rejected: {', '.join(affected)}"
