@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import sys
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -227,7 +228,10 @@ class _CatalogReader:
     def name_of(self, node: YNode, what: str, *subjects: str) -> str | None:
         value = node.value
         if isinstance(value, (str, int, float)) and not isinstance(value, bool) and str(value):
-            return str(value)
+            # Interned: a name is looked up in the executive's indexes a dozen times per
+            # activation, and with one string object per name (the mission's literals
+            # too) each lookup compares pointers, not characters in cold memory.
+            return sys.intern(str(value))
         self.error(
             codes.WRONG_TYPE, f"{what} must be a name, got {_kind(node)}", node.mark, *subjects
         )

@@ -63,6 +63,9 @@ class BehaviorCoordinator:
         behavior = self.host.behaviors.get(name)
         if behavior is None:
             return failure(f"unknown behavior {name}{self._suggest(name)}")
+        # The catalog's own (interned) string from here on: every index lookup below
+        # then matches by identity instead of comparing characters.
+        name = behavior.behavior_name
         form = self.specialist.check_behavior_format(COORDINATOR, name, arguments)
         if not form.ok:
             return form

@@ -84,7 +84,9 @@ _EV_NAME, _EV_UID, _EV_CODE, _EV_TIME, _EV_DETAIL = (
 )
 
 
-@dataclass(frozen=True, slots=True)
+# The bus builds one of these per observed call or message (some 18 per recorded
+# activation): same slot-descriptor construction as above.
+@dataclass(frozen=True, slots=True, init=False)
 class ServiceCallRecord:
     """A completed service call as observers see it (and the recorder writes it)."""
 
@@ -95,6 +97,24 @@ class ServiceCallRecord:
     request: dict[str, Any]
     response: dict[str, Any]
     log_time_ns: int
+
+    def __init__(
+        self,
+        seq: int,
+        parent_seq: int | None,
+        caller: str,
+        service: str,
+        request: dict[str, Any],
+        response: dict[str, Any],
+        log_time_ns: int,
+    ) -> None:
+        _SC_SEQ(self, seq)
+        _SC_PARENT(self, parent_seq)
+        _SC_CALLER(self, caller)
+        _SC_SERVICE(self, service)
+        _SC_REQUEST(self, request)
+        _SC_RESPONSE(self, response)
+        _SC_TIME(self, log_time_ns)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -107,10 +127,26 @@ class ServiceCallRecord:
         }
 
 
-@dataclass(frozen=True, slots=True)
+_SC_SEQ, _SC_PARENT, _SC_CALLER, _SC_SERVICE, _SC_REQUEST, _SC_RESPONSE, _SC_TIME = (
+    ServiceCallRecord.__dict__[n].__set__
+    for n in ("seq", "parent_seq", "caller", "service", "request", "response", "log_time_ns")
+)
+
+
+@dataclass(frozen=True, slots=True, init=False)
 class TopicRecord:
     """A message published on a topic."""
 
     topic: str
     data: dict[str, Any]
     log_time_ns: int
+
+    def __init__(self, topic: str, data: dict[str, Any], log_time_ns: int) -> None:
+        _TR_TOPIC(self, topic)
+        _TR_DATA(self, data)
+        _TR_TIME(self, log_time_ns)
+
+
+_TR_TOPIC, _TR_DATA, _TR_TIME = (
+    TopicRecord.__dict__[n].__set__ for n in ("topic", "data", "log_time_ns")
+)

@@ -234,7 +234,29 @@ def object_period_ns(world: World | None) -> int | None:
 
 
 # -- the call log ----------------------------------------------------------------------------
+# One line per top-level call: it runs once per activation, so the common types (exact
+# str, int, float, bool, None, list, dict) are told apart by `type(...) is`, not by
+# isinstance against the Mapping ABC; anything else takes the general path.
 def _value(value: Any) -> str:
+    kind = type(value)
+    if kind is str:
+        return value
+    if kind is int:
+        return str(value)
+    if kind is float:
+        return f"{value:g}"
+    if kind is bool:
+        return "true" if value else "false"
+    if value is None:
+        return "null"
+    if kind is list or kind is tuple:
+        return "[" + ", ".join([_value(v) for v in value]) + "]"
+    if kind is dict:
+        return "{" + ", ".join([f"{k}={_value(v)}" for k, v in value.items()]) + "}"
+    return _any_value(value)
+
+
+def _any_value(value: Any) -> str:
     if isinstance(value, str):
         return value
     if isinstance(value, bool) or value is None:
@@ -248,35 +270,53 @@ def _value(value: Any) -> str:
     return str(value)
 
 
-def _fields(values: Mapping[str, Any]) -> str:
-    """`behavior` first and bare, `arguments` spread out, the rest as key=value."""
+#: Values `_fields` leaves out (compared by ==, so an empty tuple is kept).
+_EMPTY: tuple[Any, ...] = ([], {}, "", None)
+#: Types whose values never equal one of `_EMPTY`.
+_NEVER_EMPTY = frozenset({int, float, bool})
+
+
+def _fields(values: Mapping[str, Any], skip: tuple[str, ...] = ()) -> str:
+    """`behavior` first and bare, `arguments` spread out, the rest as key=value
+    (except the keys in `skip`)."""
     parts: list[str] = []
     behavior = values.get("behavior")
-    if isinstance(behavior, str):
+    if type(behavior) is str or isinstance(behavior, str):
         parts.append(behavior)
     for key, value in values.items():
-        if key == "behavior" and isinstance(value, str):
+        if key in skip:
             continue
-        if key == "arguments" and isinstance(value, Mapping):
+        kind = type(value)
+        if key == "behavior" and (kind is str or isinstance(value, str)):
+            continue
+        if key == "arguments" and (kind is dict or isinstance(value, Mapping)):
             parts += [f"{k}={_value(v)}" for k, v in value.items()]
             continue
-        if value in ([], {}, "", None):
+        if kind is str or kind is list or kind is dict:
+            if not value:
+                continue
+        elif value is None or (kind not in _NEVER_EMPTY and value in _EMPTY):
             continue
         parts.append(f"{key}={_value(value)}")
     return " ".join(parts)
+
+
+_ANSWER_KEYS = ("ok", "error")
 
 
 def call_log_message(call: Mapping[str, Any], log_time_ns: int) -> dict[str, Any]:
     """A top-level service call as one `foxglove.Log` line: `service request -> answer`."""
     request = call.get("request")
     response = call.get("response")
-    request = request if isinstance(request, Mapping) else {}
-    response = response if isinstance(response, Mapping) else {}
+    if type(request) is not dict and not isinstance(request, Mapping):
+        request = {}
+    if type(response) is not dict and not isinstance(response, Mapping):
+        response = {}
     ok = bool(response.get("ok"))
     asked = _fields(request)
     head = f"{call.get('service', '')} {asked}".rstrip()
     if ok:
-        extra = _fields({k: v for k, v in response.items() if k not in ("ok", "error")})
+        extra = _fields(response, _ANSWER_KEYS)
         answer = f"ok {extra}".rstrip()
     else:
         answer = f"refused: {response.get('error', '')}"

@@ -309,17 +309,15 @@ class Recorder:
 
     # -- BusObserver ---------------------------------------------------------------------
     def on_service_call(self, record: ServiceCallRecord) -> None:
-        channel = self._services.get(record.service)
+        service = record.service
+        channel = self._services.get(service)
         if channel is None:
-            channel = self._services[record.service] = self._channel(
-                self._prefix + record.service, SERVICE_CALL
-            )
+            channel = self._services[service] = self._channel(self._prefix + service, SERVICE_CALL)
         data = call_message(record)
-        self._write(channel, record.log_time_ns, encode_json(data))
+        log_time_ns = record.log_time_ns
+        self._write(channel, log_time_ns, encode_json(data))
         if record.parent_seq is None:
-            self._derived(
-                "call_log", record.log_time_ns, call_log_message(data, record.log_time_ns)
-            )
+            self._derived("call_log", log_time_ns, call_log_message(data, log_time_ns))
 
     def on_topic(self, record: TopicRecord) -> None:
         self.write_topic(record.topic, record.data, record.log_time_ns)
@@ -469,18 +467,20 @@ class Recorder:
             if self._lost:
                 return  # already reported (OutputLost); the session is unwinding
             self._check_open()
-        if not self._pending:
+        pending = self._pending
+        if not pending:
             self._pending_since = log_time_ns
+        count = self._count
         try:
             # (channel_id, log_time, data, publish_time, sequence); sequence is a uint32
-            self._add(channel, log_time_ns, data, log_time_ns, self._count & 0xFFFFFFFF)
+            self._add(channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF)
         except OSError as exc:
             self._lose(exc)
-        self._count += 1
+        self._count = count + 1
         self._last_ns = log_time_ns
-        self._pending += 1
+        self._pending = pending = pending + 1
         if (
-            self._pending >= self.flush_messages
+            pending >= self.flush_messages
             or log_time_ns - self._pending_since >= self.flush_interval_ns
         ):
             self.flush()
