@@ -65,9 +65,44 @@ def test_verify_imports_its_command_only() -> None:
     commands = [m for m in modules if m.startswith("aeroexec.cli.") and m.endswith("_cmd")]
     assert commands == ["aeroexec.cli.verify_cmd"]
     # The verifier's graph questions are networkx's (the project's rule), so verify
-    # imports it; nothing else heavy (pydantic is typer's own).
+    # imports it; nothing else heavy: not pydantic (the command line's plain values are
+    # read without it, aeroexec/cli/command.py).
     assert "networkx" in modules
-    assert [m for m in HEAVY if m in modules and m not in ("pydantic", "networkx")] == []
+    assert [m for m in HEAVY if m in modules and m != "networkx"] == []
+    # A catalog without missions, tasks or behaviors of its own: no executive core, no
+    # simulator, no mission checks, no task rules, no other report format.
+    unused = (
+        "typer._adapters",
+        "aeroexec.executive.executive",
+        "aeroexec.vehicles.sim",
+        "aeroexec.verifier.missions",
+        "aeroexec.verifier.mission_run",
+        "aeroexec.verifier.task_rules",
+        "aeroexec.verifier.witness_run",
+        "aeroexec.verifier.report.sarif",
+    )
+    assert [m for m in unused if m in modules] == []
+
+
+def test_the_rules_of_each_kind_are_all_found_when_only_that_kind_is_asked_for() -> None:
+    probe = (
+        "import json, sys\n"
+        "from aeroexec.verifier.registry import all_rules\n"
+        "kind = sys.argv[1]\n"
+        "first = [r.code for r in all_rules(kind)]\n"
+        "every = [r.code for r in all_rules() if r.kind == kind]\n"
+        "print(json.dumps([first, every]))\n"
+    )
+    for kind in ("loader", "catalog", "code", "mission", "task"):
+        done = subprocess.run(
+            [sys.executable, "-c", probe, kind],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        first, every = json.loads(done.stdout)
+        assert first and first == every, kind
 
 
 def test_help_lists_every_command_as_the_loaded_commands_say() -> None:

@@ -7,7 +7,8 @@ vocabulary of docs/cli.md:
   `-o, --output FILE`, `-f, --format [text|json]`), never by a Python type (`<path>`);
 * a wrong command line (an unknown option, a missing argument, a bad value) is one line on
   stderr, `aeroexec CMD: error: ...`, and exit code 2, like every other aeroexec error;
-* a group called bare (`aeroexec`, `aeroexec catalog`) prints its help and exits 0.
+* a group called bare (`aeroexec`, `aeroexec catalog`) prints its help and exits 0;
+* a value is read without pydantic when it is plain (`PlainValues`): start-up time.
 
 typer (since 0.26) carries its own copy of click as `typer._click`; this module and
 `app.py` are the only places that reach into it (pyproject.toml pins typer's minor
@@ -18,16 +19,20 @@ from __future__ import annotations
 
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from contextvars import ContextVar
+from dataclasses import dataclass
 from enum import Enum
-from typing import Any
+from pathlib import Path
+from typing import Any, get_args, get_origin
 
 import typer
 import typer.core
 from typer._click import exceptions as click_errors
 from typer._click.core import Context, Parameter
 from typer._click.formatting import HelpFormatter
+from typer._coercion import RuntimeParam, build_runtime_param
+from typer._param_types import coerce_cli_choice, coerce_cli_path
 
 #: The command running now (`aeroexec run`), for the one line an error becomes.
 _RUNNING: ContextVar[str] = ContextVar("aeroexec_command", default="aeroexec")
@@ -189,13 +194,142 @@ def usage_error_line(exc: click_errors.ClickException) -> str:
 
 def _parse(parse: Any, ctx: Context, args: list[str]) -> list[str]:
     """click's parser raises some errors (an option without its value) without saying
-    whose command line it was reading: tell them, so the line names the command."""
+    whose command line it was reading: tell them, so the line names the command.
+    Every parameter (the help option and typer's completion options too) is known by
+    now: each plain one gets its pydantic-free reading here."""
+    read_plain_values(ctx.command.get_params(ctx))
     try:
         return parse(ctx, args)  # type: ignore[no-any-return]
     except click_errors.UsageError as exc:
         if exc.ctx is None:
             exc.ctx, exc.cmd = ctx, ctx.command
         raise
+
+
+#: A plain number as typed, which Python reads as pydantic does (anything else, `1_000`,
+#: ` 5`, `1e3`, `inf`, is left to pydantic).
+_PLAIN_INT = re.compile(r"-?[0-9]+")
+_PLAIN_FLOAT = re.compile(r"-?[0-9]+(\.[0-9]+)?")
+
+#: Reads one item of a parameter's type, or raises `_NotPlain` to leave it to typer.
+Reader = Callable[[Any, Parameter, Context], Any]
+
+
+class _NotPlain(Exception):
+    """A value (or type) the plain readers leave to typer's own coercion."""
+
+
+def _read_str(value: Any, param: Parameter, ctx: Context) -> str:
+    if type(value) is str:
+        return value
+    raise _NotPlain
+
+
+def _read_bool(value: Any, param: Parameter, ctx: Context) -> bool:
+    if type(value) is bool:
+        return value
+    raise _NotPlain
+
+
+def _read_int(value: Any, param: Parameter, ctx: Context) -> int:
+    if type(value) is int:
+        return value
+    if type(value) is str and _PLAIN_INT.fullmatch(value):
+        return int(value)
+    raise _NotPlain
+
+
+def _read_float(value: Any, param: Parameter, ctx: Context) -> float:
+    if type(value) is float:
+        return value
+    if type(value) is int or (type(value) is str and _PLAIN_FLOAT.fullmatch(value)):
+        return float(value)
+    raise _NotPlain
+
+
+def _path_reader(param_info: Any) -> Reader:
+    def read(value: Any, param: Parameter, ctx: Context) -> Any:
+        if type(value) is str and value:
+            # A Path already: typer's checks (exists, file_okay...) without its pydantic
+            # str -> Path step, which makes the same Path.
+            return coerce_cli_path(Path(value), param_info, path_type=Path, param=param, ctx=ctx)  # type: ignore[arg-type]
+        raise _NotPlain
+
+    return read
+
+
+def _choice_reader(choices: Sequence[Any], case_sensitive: bool) -> Reader:
+    def read(value: Any, param: Parameter, ctx: Context) -> Any:
+        return coerce_cli_choice(value, choices=choices, case_sensitive=case_sensitive, ctx=ctx)
+
+    return read
+
+
+_READERS: dict[Any, Reader] = {str: _read_str, bool: _read_bool, int: _read_int, float: _read_float}
+
+
+def _reader(annotation: Any, param_info: Any) -> Reader | None:
+    """How to read one item of `annotation` without pydantic, or None (typer's way)."""
+    if annotation in _READERS:
+        return _READERS[annotation]
+    if annotation is Path:
+        return _path_reader(param_info)
+    if isinstance(annotation, type) and issubclass(annotation, Enum):
+        return _choice_reader(list(annotation), param_info.case_sensitive)
+    return None
+
+
+@dataclass(frozen=True)
+class PlainValues(RuntimeParam):
+    """Reads a parameter of a plain type (str, bool, int, float, Path, an Enum, or a
+    list of one of them) as typer's pydantic adapters would, without importing pydantic
+    (its import is a third of `aeroexec verify`'s start-up).
+
+    Only what is certain to come out the same is read here: a value of the exact type,
+    a plain number, a non-empty path, a choice. Anything else, and every value that
+    fails (so every error message), goes to typer's own coercion."""
+
+    read: Reader
+    many: bool
+
+    def _coerce_value(self, value: Any, param: Any, ctx: Context) -> Any:
+        try:
+            if not self.many:
+                return self.read(value, param, ctx)
+            items = value if isinstance(value, (list, tuple)) else [value]
+            return [self.read(item, param, ctx) for item in items]
+        except Exception:
+            typer_own = build_runtime_param(param.type_descriptor)
+            return typer_own._coerce_value(value, param=param, ctx=ctx)
+
+    @classmethod
+    def of(cls, param: Any) -> PlainValues | None:
+        """The plain reading of a typer parameter, or None when its type is not plain."""
+        descriptor = getattr(param, "type_descriptor", None)
+        if descriptor is None or descriptor.is_file:
+            return None
+        info = descriptor.parameter_info
+        if info.parser is not None:
+            return None
+        if info.min is not None or info.max is not None or info.path_type is not None:
+            return None
+        annotation = descriptor.annotation
+        many = get_origin(annotation) is list
+        item = get_args(annotation)[0] if many else annotation
+        read = _reader(item, info)
+        if read is None:
+            return None
+        return cls(parameter_info=info, annotation=annotation, read=read, many=many)
+
+
+def read_plain_values(params: Sequence[Parameter]) -> None:
+    """Give each plain parameter its pydantic-free reading, in the `_runtime_param` typer
+    caches (typer builds its own, for the others, when first needed)."""
+    for param in params:
+        if getattr(param, "_runtime_param", True) is None:
+            plain = PlainValues.of(param)
+            if plain is not None:
+                param._runtime_param = plain  # type: ignore[attr-defined]
 
 
 class Command(typer.core.TyperCommand):

@@ -1,19 +1,29 @@
 """The deterministic executive core: clock, bus, processes, behaviors, the thesis'
-coordinator / specialist / resource manager, beliefs, and the `Executive` facade."""
+coordinator / specialist / resource manager, beliefs, and the `Executive` facade.
 
-from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, GenericBehavior, Situation
-from aeroexec.executive.beliefs import Beliefs, BeliefSyntaxError
-from aeroexec.executive.bus import Bus, BusObserver, MemoryObserver
-from aeroexec.executive.clock import DEFAULT_TICK_NS, NS_PER_S, Clock, SimClock, WallClock
-from aeroexec.executive.executive import Executive, Library
-from aeroexec.executive.messages import (
-    BehaviorEvent,
-    EventCode,
-    ServiceCallRecord,
-    ServiceResult,
-    TopicRecord,
-)
-from aeroexec.executive.process import DroneProcess, ProcessState
+The names are loaded when first used (PEP 562): a command that needs only `Behavior`
+(`verify`, discovering a project's behaviors) does not import the executive, its
+vehicles and the simulator with it."""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from aeroexec.executive.behavior import ALLOWED, Behavior, Finished, GenericBehavior, Situation
+    from aeroexec.executive.beliefs import Beliefs, BeliefSyntaxError
+    from aeroexec.executive.bus import Bus, BusObserver, MemoryObserver
+    from aeroexec.executive.clock import DEFAULT_TICK_NS, NS_PER_S, Clock, SimClock, WallClock
+    from aeroexec.executive.executive import Executive, Library
+    from aeroexec.executive.messages import (
+        BehaviorEvent,
+        EventCode,
+        ServiceCallRecord,
+        ServiceResult,
+        TopicRecord,
+    )
+    from aeroexec.executive.process import DroneProcess, ProcessState
 
 __all__ = [
     "ALLOWED",
@@ -41,3 +51,44 @@ __all__ = [
     "TopicRecord",
     "WallClock",
 ]
+
+#: Each public name -> the module defining it, imported when the name is first used.
+_WHERE = {
+    "ALLOWED": "behavior",
+    "Behavior": "behavior",
+    "BehaviorEvent": "messages",
+    "BeliefSyntaxError": "beliefs",
+    "Beliefs": "beliefs",
+    "Bus": "bus",
+    "BusObserver": "bus",
+    "Clock": "clock",
+    "DEFAULT_TICK_NS": "clock",
+    "DroneProcess": "process",
+    "EventCode": "messages",
+    "Executive": "executive",
+    "Finished": "behavior",
+    "GenericBehavior": "behavior",
+    "Library": "executive",
+    "MemoryObserver": "bus",
+    "NS_PER_S": "clock",
+    "ProcessState": "process",
+    "ServiceCallRecord": "messages",
+    "ServiceResult": "messages",
+    "SimClock": "clock",
+    "Situation": "behavior",
+    "TopicRecord": "messages",
+    "WallClock": "clock",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

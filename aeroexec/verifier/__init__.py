@@ -14,29 +14,37 @@ and run as sequences in the executive (`missions`, `mission_fold`, `mission_run`
 Rules are registered in `aeroexec.verifier.registry` (`all_rules()`, `get(code)`); each has a
 code, a severity and a one-paragraph doc. `docs/rules.md` is generated from it
 (`python -m aeroexec.verifier.docs`).
-"""
 
-from aeroexec.verifier.engine import (
-    check_any_catalog,
-    check_catalog,
-    check_task_catalog,
-    expand_catalog_paths,
-    verify,
-    verify_catalog,
-    verify_catalog_file,
-)
-from aeroexec.verifier.findings import (
-    Finding,
-    InputError,
-    Outcome,
-    PathStep,
-    Report,
-    Step,
-    Witness,
-)
-from aeroexec.verifier.graphs import CatalogGraphs
-from aeroexec.verifier.missions import MissionScript, check_mission, parse_mission, read_mission
-from aeroexec.verifier.registry import Rule, all_rules, get
+The names are loaded when first used (PEP 562): `aeroexec verify CATALOG` does not import
+the mission checks, and the executive they run, that only missions need."""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from aeroexec.verifier.engine import (
+        check_any_catalog,
+        check_catalog,
+        check_task_catalog,
+        expand_catalog_paths,
+        verify,
+        verify_catalog,
+        verify_catalog_file,
+    )
+    from aeroexec.verifier.findings import (
+        Finding,
+        InputError,
+        Outcome,
+        PathStep,
+        Report,
+        Step,
+        Witness,
+    )
+    from aeroexec.verifier.graphs import CatalogGraphs
+    from aeroexec.verifier.missions import MissionScript, check_mission, parse_mission, read_mission
+    from aeroexec.verifier.registry import Rule, all_rules, get
 
 __all__ = [
     "CatalogGraphs",
@@ -62,3 +70,42 @@ __all__ = [
     "verify_catalog",
     "verify_catalog_file",
 ]
+
+#: Each public name -> the module defining it, imported when the name is first used.
+_WHERE = {
+    "CatalogGraphs": "graphs",
+    "Finding": "findings",
+    "InputError": "findings",
+    "MissionScript": "missions",
+    "Outcome": "findings",
+    "PathStep": "findings",
+    "Report": "findings",
+    "Rule": "registry",
+    "Step": "findings",
+    "Witness": "findings",
+    "all_rules": "registry",
+    "check_any_catalog": "engine",
+    "check_catalog": "engine",
+    "check_mission": "missions",
+    "check_task_catalog": "engine",
+    "expand_catalog_paths": "engine",
+    "get": "registry",
+    "parse_mission": "missions",
+    "read_mission": "missions",
+    "verify": "engine",
+    "verify_catalog": "engine",
+    "verify_catalog_file": "engine",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _WHERE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

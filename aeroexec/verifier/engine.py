@@ -3,6 +3,10 @@
 Many inputs, one verdict: an input that cannot be read (a missing file, invalid YAML,
 a mission that is not Python) is recorded as an `InputError` and the others are still
 verified; the report's exit code is then 2.
+
+What only some runs need is imported when they need it (start-up time of `aeroexec
+verify CATALOG`): the mission checks (the folder, the executive that runs the calls)
+with missions, the task rules with a task catalog, the witness runs with behaviors.
 """
 
 from __future__ import annotations
@@ -22,18 +26,11 @@ from aeroexec.gc_pause import paused_gc
 from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
-from aeroexec.verifier.missions import (
-    MissionScript,
-    check_mission,
-    expand_mission_paths,
-    read_mission,
-)
 from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
-from aeroexec.verifier.task_rules import TaskContext
-from aeroexec.verifier.witness_run import realize_findings
 
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
+    from aeroexec.verifier.missions import MissionScript
 
 CatalogInput = str | Path | Catalog | TaskCatalog
 Library = Mapping[str, type[Behavior]]
@@ -94,12 +91,16 @@ def check_catalog(
             if wanted is None or rule.code in wanted:
                 findings.extend(rule.check(graphs, behaviors))  # type: ignore[call-arg]
         # Witnesses as the real behaviors make them happen (TAKE_OFF first, ...).
+        from aeroexec.verifier.witness_run import realize_findings
+
         findings = realize_findings(catalog, findings, behaviors.library())
     return findings
 
 
 def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None) -> list[Finding]:
     """The task loader's diagnostics plus every task rule's findings (unsorted)."""
+    from aeroexec.verifier.task_rules import TaskContext
+
     wanted = None if codes is None else set(codes)
     findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
     context = TaskContext(catalog)
@@ -157,6 +158,10 @@ def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) ->
 def _read_missions(
     sources: Sequence[str | Path | MissionScript], errors: list[InputError]
 ) -> list[MissionScript]:
+    if not sources:
+        return []
+    from aeroexec.verifier.missions import MissionScript, expand_mission_paths, read_mission
+
     scripts = [m for m in sources if isinstance(m, MissionScript)]
     for pattern in (m for m in sources if not isinstance(m, MissionScript)):
         try:
@@ -218,6 +223,8 @@ def _verify(
         )
     # Missions use the behavior API (execute/activate/inhibit_behavior): they are
     # checked against the behavior catalogs.
+    if scripts:
+        from aeroexec.verifier.missions import check_mission
     for catalog in behavior_catalogs:
         note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:

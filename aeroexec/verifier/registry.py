@@ -155,17 +155,30 @@ for _code, (_name, _severity, _doc) in task_codes.TASK_LOADER_DOCS.items():
     register(Rule(_code, _name, _severity, _doc, "loader"))
 
 
-def _load_rule_modules() -> None:
+#: The modules whose import registers the rules of each kind (loader rules are above).
+#: Only the kind asked for is imported: verifying a catalog does not load the mission
+#: checks and the executive they run (start-up time).
+_RULE_MODULES: dict[str, tuple[str, ...]] = {
+    "loader": (),
+    "catalog": ("aeroexec.verifier.rules",),
+    "code": ("aeroexec.verifier.rules",),
+    "mission": ("aeroexec.verifier.missions",),
+    "task": ("aeroexec.verifier.task_rules",),
+}
+
+
+def _load_rule_modules(kind: str | None = None) -> None:
     # Rules register themselves on import; importing here keeps `all_rules()` complete
     # whichever module a caller imported first.
-    importlib.import_module("aeroexec.verifier.rules")
-    importlib.import_module("aeroexec.verifier.missions")
-    importlib.import_module("aeroexec.verifier.task_rules")
+    kinds = _RULE_MODULES.values() if kind is None else [_RULE_MODULES.get(kind, ())]
+    for modules in kinds:
+        for module in modules:
+            importlib.import_module(module)
 
 
 def all_rules(kind: str | None = None) -> tuple[Rule, ...]:
     """Every registered rule (of one kind), sorted by code."""
-    _load_rule_modules()
+    _load_rule_modules(kind)
     return tuple(rule for code, rule in sorted(_RULES.items()) if kind is None or rule.kind == kind)
 
 
