@@ -46,6 +46,12 @@ COMPRESSIONS = tuple(_COMPRESSION_TYPES)
 CHUNK_SIZE = 1024 * 1024
 
 
+def writer_options(compression: str) -> dict[str, Any]:
+    """The keyword arguments of mcap's `Writer` for an import (the benchmark's floor
+    writes with the same)."""
+    return {"chunk_size": CHUNK_SIZE, "compression": _COMPRESSION_TYPES[compression]}
+
+
 def raw_topic(topic: str) -> str:
     return RAW_PREFIX + topic
 
@@ -54,9 +60,7 @@ class ImportSink:
     def __init__(self, stream: IO[bytes], drone: str, compression: str = "lz4") -> None:
         if compression not in COMPRESSIONS:
             raise ValueError(f"compression must be one of {COMPRESSIONS}")
-        self._writer = Writer(
-            stream, chunk_size=CHUNK_SIZE, compression=_COMPRESSION_TYPES[compression]
-        )
+        self._writer = Writer(stream, **writer_options(compression))
         self._prefix = f"/{drone}/"
         self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._raw: dict[int, int] = {}  # bag connection id -> channel id
@@ -146,4 +150,4 @@ class ImportSink:
         self._writer.finish()
 
 
-__all__ = ["METADATA_NAME", "RAW_PREFIX", "ImportSink", "raw_topic"]
+__all__ = ["METADATA_NAME", "RAW_PREFIX", "ImportSink", "raw_topic", "writer_options"]
