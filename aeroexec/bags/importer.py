@@ -5,10 +5,11 @@ Every message of every connection is copied byte for byte to a raw `ros1` channe
 when it gives a vehicle state, the latest velocity/battery/status before it), to derive
 the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
 and coordinator calls (`reconstruct.py`), `list_of_active_capabilities`, `beliefs`,
-`process_state`, `vehicle/state` (+ `vehicle/transform`, and the `scene` with the
-vehicle's body at the first state), `call_log` for the reconstructed calls. Log times are
-the bag's. Messages are written in bag time order: reconstruction decides an input only
-when the 2 x grace after it has been read, so the messages from its horizon on wait
+`process_state`, `vehicle/state` (+ `vehicle/transform` when the pose changed, and the
+`scene` with the vehicle's body at the first state), `call_log` for the reconstructed
+calls. Log times are the bag's. Messages are written in bag time order: reconstruction
+decides an input only when the 2 x grace after it has been read, so the messages from its
+horizon on wait
 (about a second of bag time) until it has: the bag's own in a queue (they come in time
 order), the derived ones in a small heap; within one instant the
 reconstructed commands come first, as the executive would have published them.
@@ -205,6 +206,8 @@ class _Import:
         self.vehicle = VehicleStateBuilder()
         self.period = mapping.state_period_ns
         self._last_state_ns: int | None = None
+        #: The pose of the last transform written: a state with the same pose writes none.
+        self._last_pose: tuple[tuple[float, float, float], float] | None = None
         self._skipped: _Pending | None = None
         self._latest: dict[Kind, _Pending] = {}
         self.capabilities = CapabilityTracker()
@@ -305,9 +308,14 @@ class _Import:
         first = self._last_state_ns is None
         self._last_state_ns = time_ns
         self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
-        frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
-        if frame is not None:
-            self._derive("vehicle/transform", time_ns, frame)
+        # As the Recorder does: Foxglove holds the latest transform, so a vehicle that
+        # did not move (hovering, landed) needs none.
+        moved = (pose.position, pose.yaw)
+        if moved != self._last_pose:
+            self._last_pose = moved
+            frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
+            if frame is not None:
+                self._derive("vehicle/transform", time_ns, frame)
         if first:  # a bag has no world: the scene is the vehicle's body
             self._derive("scene", time_ns, first_scene(time_ns, self.drone, None))
 
