@@ -3,16 +3,16 @@
 Every message of every connection is copied byte for byte to a raw `ros1` channel
 (`sink.py`); only messages of mapped topics are decoded, and only those used (a pose
 when it gives a vehicle state, the latest velocity/battery/status before it), to derive
-the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
-and coordinator calls (`reconstruct.py`), `list_of_active_capabilities`, `beliefs`,
-`process_state`, `vehicle/state` (+ `vehicle/transform` when the pose changed, and the
-`scene` with the vehicle's body at the first state), `call_log` for the reconstructed
-calls. Log times are the bag's. Messages are written in bag time order: reconstruction
-decides an input only when the 2 x grace after it has been read, so the messages from its
-horizon on wait
-(about a second of bag time) until it has: the bag's own in a queue (they come in time
-order), the derived ones in a small heap; within one instant the
-reconstructed commands come first, as the executive would have published them.
+the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed
+`mission/command` and coordinator calls (`reconstruct.py`),
+`list_of_active_capabilities`, `beliefs`, `process_state`, `vehicle/state` (+
+`vehicle/transform` when the pose changed, and the `scene` with the vehicle's body at
+the first state), `call_log` for the reconstructed calls. Log times are the bag's.
+Messages are written in bag time order: reconstruction decides an input only when the 2
+x grace after it has been read, so the messages from its horizon on wait (about a second
+of bag time) until it has: the bag's own in a queue (they come in time order), the
+derived ones in a small heap; within one instant the reconstructed commands come first,
+as the executive would have published them.
 
 The output is written next to the target and renamed into place at the end, so a bag
 that turns out damaged halfway leaves no half-written file behind.
