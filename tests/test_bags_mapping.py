@@ -107,6 +107,22 @@ def test_cli_mapping_and_drone_options(tmp_path: Path) -> None:
     assert "pose                 <- /turtle2/pose" in result.stdout
     states = len(state_times(topic_times(TURTLE_LZ4, "/turtle2/pose"), NS // 2))
     assert states == 43  # 1344 poses over ~21 s: one state per 0.5 s, and the last pose
-    assert f"derived /t2/: vehicle/state {states}, vehicle/transform {states}, scene 1" in (
-        result.stdout
+    # A transform only for a state whose pose changed (as the Recorder writes them).
+    recording = open_recording(tmp_path / "t.mcap")
+    poses = [
+        (tuple(r.data["position"]), r.data["yaw"])
+        for r in recording.records()
+        if r.topic == "/t2/vehicle/state"
+    ]
+    moved = [p for i, p in enumerate(poses) if i == 0 or p != poses[i - 1]]
+    transforms = [
+        ((r.data["translation"]["x"], r.data["translation"]["y"]), r.log_time_ns)
+        for r in recording.records()
+        if r.topic == "/t2/vehicle/transform"
+    ]
+    assert len(poses) == states and 0 < len(moved) < states  # the turtle stops once
+    assert [t[0] for t in transforms] == [p[0][:2] for p in moved]
+    assert (
+        f"derived /t2/: vehicle/state {states}, vehicle/transform {len(moved)}, scene 1"
+        in result.stdout
     )

@@ -144,10 +144,17 @@ def test_reconstructed_commands_come_first_in_their_instant(tmp_path: Path) -> N
     at_five = [topic for t, topic, _ in items if t == 5.0]
     assert at_five == ["mission/command", "list_of_active_capabilities"]
     times = []
+    at_two = []  # every message of that instant, the bag's own (raw) included
     with open(tmp_path / "m.mcap", "rb") as stream:
-        for _, _, message in make_reader(stream).iter_messages(log_time_order=False):
+        for _, channel, message in make_reader(stream).iter_messages(log_time_order=False):
             times.append(message.log_time)
+            if message.log_time == START_NS + 2 * NS:
+                at_two.append(channel.topic)
     assert times == sorted(times)  # the whole file is in time order
+    # At 2 s the bag's messages wait for the reconstruction horizon (an activation at
+    # 1 s is undecided): the reconstructed command and its call still come first.
+    assert at_two[:2] == ["/drone1/mission/command", "/drone1/activate_behavior"]
+    assert "/ros1/drone1/list_of_active_behaviors" in at_two[2:]
 
 
 def test_carried_commands_are_not_reconstructed(tmp_path: Path) -> None:

@@ -146,3 +146,20 @@ def test_resolver_builds_one_store_per_distinct_definition() -> None:
         alive = [c for c in reader.connections if c.topic == "/drone1/process_alive_signal"]
     decoders = {id(resolver.decoder(c.msgtype, c.msgdef.data, c.digest).store) for c in alive}
     assert len(alive) > 30 and len(decoders) == 1
+
+
+def test_stores_are_kept_for_the_process_by_definition_text() -> None:
+    """A second import (a fleet of bags) reuses the stores the first one built; a
+    different definition of the same type still gets its own store."""
+    msgtype = "aeroexec_test/msg/Kept"
+    first = TypeResolver().decoder(msgtype, "int32 a", "")
+    again = TypeResolver().decoder(msgtype, "int32 a", "")
+    other = TypeResolver().decoder(msgtype, "int32 a\nstring b", "")
+    assert again.store is first.store
+    assert other.store is not first.store
+    assert first.decode(b"\x07\x00\x00\x00").a == 7  # type: ignore[attr-defined]
+    decoded = other.decode(b"\x07\x00\x00\x00\x02\x00\x00\x00hi")
+    assert (decoded.a, decoded.b) == (7, "hi")  # type: ignore[attr-defined]
+    for _ in range(2):  # a failure is not kept as a store: it fails again
+        with pytest.raises(ValueError, match="definition cannot be used"):
+            TypeResolver().decoder(msgtype, "int32 a\nNoSuchPackage/Missing c", "")

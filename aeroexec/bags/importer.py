@@ -3,14 +3,16 @@
 Every message of every connection is copied byte for byte to a raw `ros1` channel
 (`sink.py`); only messages of mapped topics are decoded, and only those used (a pose
 when it gives a vehicle state, the latest velocity/battery/status before it), to derive
-the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed `mission/command`
-and coordinator calls (`reconstruct.py`), `list_of_active_capabilities`, `beliefs`,
-`process_state`, `vehicle/state` (+ `vehicle/transform`, and the `scene` with the
-vehicle's body at the first state), `call_log` for the reconstructed calls. Log times are
-the bag's. Messages are written in bag time order: reconstruction decides an input only
-when the 2 x grace after it has been read, so the messages from its horizon on wait in a
-small heap (about a second of bag time) until it has; within one instant the
-reconstructed commands come first, as the executive would have published them.
+the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed
+`mission/command` and coordinator calls (`reconstruct.py`),
+`list_of_active_capabilities`, `beliefs`, `process_state`, `vehicle/state` (+
+`vehicle/transform` when the pose changed, and the `scene` with the vehicle's body at
+the first state), `call_log` for the reconstructed calls. Log times are the bag's.
+Messages are written in bag time order: reconstruction decides an input only when the 2
+x grace after it has been read, so the messages from its horizon on wait (about a second
+of bag time) until it has: the bag's own in a queue (they come in time order), the
+derived ones in a small heap; within one instant the reconstructed commands come first,
+as the executive would have published them.
 
 The output is written next to the target and renamed into place at the end, so a bag
 that turns out damaged halfway leaves no half-written file behind.
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import heapq
 import os
+from collections import deque
 from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
@@ -134,43 +137,60 @@ class _Ordered:
     has moved past its instant and past the reconstruction horizon, so that the
     reconstructed commands and calls (rank 0) of an instant come before the other
     messages of that instant (rank 1): the order in which the executive publishes them
-    (the capability and process changes of an activation follow its command)."""
+    (the capability and process changes of an activation follow its command).
+
+    Raw messages come in bag time order, so they wait in a queue (already in order);
+    only derived messages go through the heap, and `release` merges the two."""
 
     RECONSTRUCTED = 0
     OTHER = 1
 
     def __init__(self, sink: ImportSink) -> None:
         self._sink = sink
-        #: (time, rank, arrival, connection or None, raw bytes or topic, payload, call)
-        self._heap: list[tuple[int, int, int, BagConnection | None, Any, Any, bool]] = []
+        #: (time, rank, arrival, topic, payload, call)
+        self._heap: list[tuple[int, int, int, str, Any, bool]] = []
+        #: (time, arrival, connection, raw bytes), in time order
+        self._raw: deque[tuple[int, int, BagConnection, bytes]] = deque()
         self._order = 0
 
     def raw(self, time_ns: int, connection: BagConnection, data: bytes) -> None:
         self._order += 1
-        heapq.heappush(
-            self._heap, (time_ns, self.OTHER, self._order, connection, data, None, False)
-        )
+        self._raw.append((time_ns, self._order, connection, data))
 
     def derived(
         self, time_ns: int, rank: int, topic: str, data: dict[str, Any], call: bool = False
     ) -> None:
         self._order += 1
-        heapq.heappush(self._heap, (time_ns, rank, self._order, None, topic, data, call))
+        heapq.heappush(self._heap, (time_ns, rank, self._order, topic, data, call))
 
     @property
     def held(self) -> bool:
-        return bool(self._heap)
+        return bool(self._heap or self._raw)
 
     def release(self, limit: int | None) -> None:
         """Write every message before `limit` (everything when None)."""
-        heap = self._heap
-        sink = self._sink
-        while heap and (limit is None or heap[0][0] < limit):
-            time_ns, _, _, connection, first, data, call = heapq.heappop(heap)
-            if connection is not None:
-                sink.raw(connection, time_ns, first)
+        heap, raw, sink = self._heap, self._raw, self._sink
+        end = float("inf") if limit is None else limit
+        other = self.OTHER
+        while heap or raw:
+            if not heap:  # raw messages only: already in order
+                write = sink.raw
+                while raw and raw[0][0] < end:
+                    time_ns, _, connection, data = raw.popleft()
+                    write(connection, time_ns, data)
+                return
+            top = heap[0]
+            if raw and (raw[0][0], other, raw[0][1]) < top[:3]:
+                time_ns = raw[0][0]
+                if time_ns >= end:
+                    return
+                _, _, connection, data = raw.popleft()
+                sink.raw(connection, time_ns, data)
             else:
-                sink.derived_message(first, time_ns, data, call)
+                if top[0] >= end:
+                    return
+                time_ns, _, _, topic, data, call = heapq.heappop(heap)
+                sink.derived_message(topic, time_ns, data, call)
 
 
 class _Import:
@@ -186,6 +206,8 @@ class _Import:
         self.vehicle = VehicleStateBuilder()
         self.period = mapping.state_period_ns
         self._last_state_ns: int | None = None
+        #: The pose of the last transform written: a state with the same pose writes none.
+        self._last_pose: tuple[tuple[float, float, float], float] | None = None
         self._skipped: _Pending | None = None
         self._latest: dict[Kind, _Pending] = {}
         self.capabilities = CapabilityTracker()
@@ -286,9 +308,14 @@ class _Import:
         first = self._last_state_ns is None
         self._last_state_ns = time_ns
         self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
-        frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
-        if frame is not None:
-            self._derive("vehicle/transform", time_ns, frame)
+        # As the Recorder does: Foxglove holds the latest transform, so a vehicle that
+        # did not move (hovering, landed) needs none.
+        moved = (pose.position, pose.yaw)
+        if moved != self._last_pose:
+            self._last_pose = moved
+            frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
+            if frame is not None:
+                self._derive("vehicle/transform", time_ns, frame)
         if first:  # a bag has no world: the scene is the vehicle's body
             self._derive("scene", time_ns, first_scene(time_ns, self.drone, None))
 

@@ -43,7 +43,17 @@ _COMPRESSION_TYPES = {
     "none": CompressionType.NONE,
 }
 COMPRESSIONS = tuple(_COMPRESSION_TYPES)
-CHUNK_SIZE = 1024 * 1024
+#: mcap's Writer builds a chunk in a BytesIO and copies it out to compress: a chunk that
+#: stays in the CPU cache writes ~10 % faster than 1 MiB ones (the mission bag's 32,700
+#: records: 135 vs 155 ms), for a file 0.7 % larger. No flush bound: an import is only
+#: useful whole (it is written to a temporary name and renamed into place).
+CHUNK_SIZE = 256 * 1024
+
+
+def writer_options(compression: str) -> dict[str, Any]:
+    """The keyword arguments of mcap's `Writer` for an import (the benchmark's floor
+    writes with the same)."""
+    return {"chunk_size": CHUNK_SIZE, "compression": _COMPRESSION_TYPES[compression]}
 
 
 def raw_topic(topic: str) -> str:
@@ -54,9 +64,7 @@ class ImportSink:
     def __init__(self, stream: IO[bytes], drone: str, compression: str = "lz4") -> None:
         if compression not in COMPRESSIONS:
             raise ValueError(f"compression must be one of {COMPRESSIONS}")
-        self._writer = Writer(
-            stream, chunk_size=CHUNK_SIZE, compression=_COMPRESSION_TYPES[compression]
-        )
+        self._writer = Writer(stream, **writer_options(compression))
         self._prefix = f"/{drone}/"
         self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._raw: dict[int, int] = {}  # bag connection id -> channel id
@@ -146,4 +154,4 @@ class ImportSink:
         self._writer.finish()
 
 
-__all__ = ["METADATA_NAME", "RAW_PREFIX", "ImportSink", "raw_topic"]
+__all__ = ["METADATA_NAME", "RAW_PREFIX", "ImportSink", "raw_topic", "writer_options"]

@@ -9,7 +9,8 @@ rosbags' ROS 1 Noetic store (`aerostack_typestore()`).
 
 Decoding a bag connection (`TypeResolver`): the bag's own `message_definition` wins. A
 connection with a definition gets a store built from that text alone (cached by text, so
-35 connections of one type cost one store); only a connection without one falls back to
+35 connections of one type cost one store, and the stores are kept for the process:
+the bags of a fleet repeat the same definitions); only a connection without one falls back to
 the shipped store. A bag whose definition disagrees with a shipped one is therefore
 decoded as the bag says.
 
@@ -144,14 +145,25 @@ class TypeResolver:
         key = (msgtype, msgdef)
         store = self._by_text.get(key)
         if store is None:
-            store = get_typestore(Stores.EMPTY)
-            try:
-                store.register(parse_msgdef(msgdef, msgtype))  # type: ignore[arg-type]
-                store.get_msgdef(msgtype)  # generate the (de)serializers now: fail here
-            except Exception as exc:  # TypesysError, KeyError for a missing sub-type...
-                first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-                raise ValueError(
-                    f"{ros1_name(msgtype)}: the bag's definition cannot be used: {first}"
-                ) from None
-            self._by_text[key] = store
+            store = self._by_text[key] = _store_from_text(msgtype, msgdef)
         return store
+
+
+@functools.lru_cache(maxsize=256)
+def _store_from_text(msgtype: str, msgdef: str) -> Typestore:
+    """A store that decodes `msgtype` as `msgdef` defines it. Kept for the process:
+    building the (de)serializers is rosbags' code generation (~5 ms a type, more than
+    reading a small bag), and a fleet of bags repeats the same definitions. Keyed by the
+    definition text, so a bag that defines a type differently gets its own store; the
+    store is only read (`deserialize_ros1`) once built. A definition that cannot be used
+    raises each time (lru_cache keeps no exceptions)."""
+    store = get_typestore(Stores.EMPTY)
+    try:
+        store.register(parse_msgdef(msgdef, msgtype))  # type: ignore[arg-type]
+        store.get_msgdef(msgtype)  # generate the (de)serializers now: fail here
+    except Exception as exc:  # TypesysError, KeyError for a missing sub-type...
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ValueError(
+            f"{ros1_name(msgtype)}: the bag's definition cannot be used: {first}"
+        ) from None
+    return store
