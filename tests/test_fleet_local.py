@@ -66,10 +66,10 @@ def test_a_bug_met_on_one_recording_is_its_error_result(
     real = tasks.replay_file
     victim = corpus.files[1]
 
-    def replay_file(path: str, options: ReplayOptions) -> ReplayResult:
+    def replay_file(path: str, options: ReplayOptions, progress: None = None) -> ReplayResult:
         if path == victim:
             return {}["no such key"]  # what a bug in replay looks like from here
-        return real(path, options)
+        return real(path, options, progress)
 
     monkeypatch.setattr(tasks, "replay_file", replay_file)
     results = replay_many(corpus.files[:3], ReplayOptions(mode=Mode.open))

@@ -11,13 +11,13 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
+from aeroexec.progress import progress_bar
 from aeroexec.recording.reader import RecordedCall
 from aeroexec.viz import texts
 from aeroexec.viz.calltree import CallTree
 from aeroexec.viz.columns import ColumnWriter
 from aeroexec.viz.intervals import BehaviorIntervals, CapabilityCounts
 from aeroexec.viz.layout import Layout, layouts_for
-from aeroexec.viz.progress import progress_bar
 from aeroexec.viz.viewer import cannot_spawn, has_display, viewer_binary, viewer_command
 
 

@@ -23,8 +23,7 @@ from __future__ import annotations
 import heapq
 import os
 from collections import deque
-from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,6 +44,7 @@ from aeroexec.bags.sink import COMPRESSIONS, RAW_PREFIX, ImportSink
 from aeroexec.bags.types import Decoder, TypeResolver
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.outputs import whole_file_or_none
+from aeroexec.progress import Advance, ProgressFactory
 from aeroexec.recording.foxglove import first_scene, vehicle_frame
 from aeroexec.recording.writer import METADATA_NAME
 
@@ -54,10 +54,6 @@ VEHICLE = "ros1-bag"
 BAG_METADATA = "ros1_bag"
 MAPPING_ATTACHMENT = "bag_mapping.yaml"
 _NS = 1_000_000_000
-#: `advance(n)`: n more bag messages were imported.
-Advance = Callable[[int], None]
-#: `progress(bag name, bag messages)` -> a context manager yielding `advance`.
-ProgressFactory = Callable[[str, int], AbstractContextManager[Advance]]
 #: Progress is reported every this many bag messages.
 PROGRESS_EVERY = 1000
 #: Kinds of which only the latest message before a vehicle state matters.

@@ -11,7 +11,7 @@ import typer
 from aeroexec.bags.importer import import_bag
 from aeroexec.cli.app import app, guarded
 from aeroexec.cli.options import choices, format_option, output_option
-from aeroexec.viz.progress import progress_bar
+from aeroexec.progress import progress_bar
 
 
 class ImportFormat(str, Enum):

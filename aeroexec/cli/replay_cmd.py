@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 import time
 from enum import Enum
@@ -28,6 +29,7 @@ from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins import discover
+from aeroexec.progress import ProgressFactory, progress_bar
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
 from aeroexec.replay.executors import LOCAL, InlineExecutor, executor_for, replay_many
@@ -39,6 +41,10 @@ from aeroexec.replay.tasks import retried
 
 if TYPE_CHECKING:
     from rich.progress import Progress
+
+#: One recording at least this big gets bars for its read and replay (~2 s of work: a
+#: 10-minute simulated patrol is ~1 MB and replays in ~0.4 s).
+ONE_BIG_REPLAY_BYTES = 4 * 1024 * 1024
 
 
 class OutputFormat(str, Enum):
@@ -98,6 +104,20 @@ def _check_outputs(paths: list[str], output: str | None, out_dir: str | None) ->
             Path(out_dir).mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise RecordingError(f"cannot create: {exc.strerror or exc}", Mark(out_dir)) from None
+
+
+def _one_big_replay(paths: list[str], executor: str) -> ProgressFactory | None:
+    """For one big recording replayed here on a terminal: bars for its read and its
+    replay (a bar over one file would sit at 0 % until the end)."""
+    if executor != LOCAL or len(paths) != 1 or not sys.stderr.isatty():
+        return None
+    try:
+        size = os.path.getsize(paths[0])
+    except OSError:  # a URL, or a file the replay will report as unreadable
+        return None
+    if size < ONE_BIG_REPLAY_BYTES:
+        return None
+    return lambda description, total: progress_bar(description, total, enabled=True, unit="percent")
 
 
 def _progress(total: int) -> Progress | None:
@@ -243,11 +263,14 @@ def replay(
         )
     # Workers start before the progress bar's thread (forking a threaded process is
     # unsafe). Until the report, stdout is stderr: Ray prints its workers' deaths to stdout.
+    one_big = _one_big_replay(paths, executor)
     with (
-        executor_for(executor, jobs, len(paths)) if paths else InlineExecutor() as where,
+        InlineExecutor(one_big)
+        if one_big is not None or not paths
+        else executor_for(executor, jobs, len(paths)) as where,
         contextlib.redirect_stdout(sys.stderr),
     ):
-        progress = _progress(len(paths))
+        progress = _progress(len(paths)) if one_big is None else None
         if progress is None:
             done = replay_many(paths, options, out_dir=out_dir, executor=where)
         else:

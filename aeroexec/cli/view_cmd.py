@@ -15,7 +15,7 @@ from aeroexec.viz.viewer import DEFAULT_WEB_PORT
 
 # rerun takes ~0.5 s to import: only `view` itself may pay for it, not every command.
 if TYPE_CHECKING:
-    from aeroexec.viz.progress import Advance
+    from aeroexec.progress import Advance
     from aeroexec.viz.view import ViewReport
 
 
@@ -28,7 +28,7 @@ def _default_output(base: Path, new: Path | None) -> Path:
 
 
 def _progress(description: str, total: int) -> AbstractContextManager[Advance]:
-    from aeroexec.viz.progress import progress_bar
+    from aeroexec.progress import progress_bar
 
     return progress_bar(f"converting {description}", total)
 

@@ -19,11 +19,13 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from aeroexec import __version__
 from aeroexec.catalog.model import Catalog
+from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.script import MissionScript, compile_mission
@@ -123,13 +125,15 @@ def replay_closed(
     *,
     mission: MissionScript | None = None,
     trust_recording: bool = False,
+    watchers: Sequence[BusObserver] = (),
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` in the simulator with `behaviors` (complete for the catalog, stand-ins
     included); the replay's outcome and notes about how.
 
     `mission`: the script to run (the user's copy); `trust_recording`: without one, run
     the script stored in the recording. Neither: the recorded command stream is replayed
-    and no code from the recording runs."""
+    and no code from the recording runs. `watchers` observe the replay's bus too (its
+    progress)."""
     notes: list[str] = []
     metadata = run.metadata
     seed = _seed(metadata, notes)
@@ -139,7 +143,7 @@ def replay_closed(
     observer = OutcomeObserver(builder)
     script = script_to_run(run, mission, trust_recording, notes)
     if script is None:
-        _replay_commands(run, catalog, behaviors, output, world, seed, drone, observer)
+        _replay_commands(run, catalog, behaviors, output, world, seed, drone, observer, watchers)
     else:
         world_name = world[1]
         config = SessionConfig(
@@ -154,7 +158,7 @@ def replay_closed(
         with mission_prints_discarded():
             result = simulate(
                 config,
-                [observer],
+                [observer, *watchers],
                 catalog=catalog.catalog,
                 script=script,
                 catalog_text=catalog.text,
@@ -176,6 +180,7 @@ def _replay_commands(
     seed: int,
     drone: str,
     observer: OutcomeObserver,
+    watchers: Sequence[BusObserver],
 ) -> None:
     vehicle = SimVehicle(parse_world(*world), seed=seed)
     # The simulation starts when the recording does (a live log's clock need not be 0).
@@ -197,7 +202,7 @@ def _replay_commands(
     metadata.update(stand_in_metadata(code))
     attachments = {"catalog.yaml": catalog.text, "world.yaml": world[0], **code.attachments}
     _, observers, recorder = session_observers(
-        output, drone, metadata, attachments, [observer], code.records, vehicle.world
+        output, drone, metadata, attachments, [observer, *watchers], code.records, vehicle.world
     )
     with recording_session(recorder, vehicle):
         executive = Executive(

@@ -20,6 +20,7 @@ from typing import Any
 
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.progress import ProgressFactory
 from aeroexec.recording.schemas import CODE_METADATA_NAME as CODE_RECORD
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.replay.outcome import (
@@ -29,6 +30,7 @@ from aeroexec.replay.outcome import (
     RunOutcome,
     Transition,
 )
+from aeroexec.replay.progress import ReadProgress
 from aeroexec.replay.source import RecordingSource
 
 COMMAND_TOPIC = "mission/command"
@@ -369,14 +371,36 @@ class RecordedRun:
 
 
 def read_run(
-    path: str | os.PathLike[str], horizon_ns: int | None = None, *, require_commands: bool = True
+    path: str | os.PathLike[str],
+    horizon_ns: int | None = None,
+    *,
+    require_commands: bool = True,
+    progress: ProgressFactory | None = None,
 ) -> RecordedRun:
     """One selective pass over `path`. `RecordingError` if it cannot be read, or (with
-    `require_commands`) if it holds no mission command to replay or compare."""
+    `require_commands`) if it holds no mission command to replay or compare. `progress`
+    is told how many bytes of the file the pass has read."""
     source = RecordingSource(path)
+    if progress is None:
+        return _read_run(source, horizon_ns, require_commands, None)
+    size = source.path.stat().st_size
+    with progress(f"reading {source.path.name}", size) as advance:
+        read = ReadProgress(advance)
+        run = _read_run(source, horizon_ns, require_commands, read)
+        read(size)
+    return run
+
+
+def _read_run(
+    source: RecordingSource,
+    horizon_ns: int | None,
+    require_commands: bool,
+    on_read: ReadProgress | None,
+) -> RecordedRun:
     builder = OutcomeBuilder(horizon_ns)
     undecodable = 0
-    for message in source.scan(wanted, frozenset({STATE_TOPIC}), ATTACHMENTS, horizon_ns):
+    scan = source.scan(wanted, frozenset({STATE_TOPIC}), ATTACHMENTS, horizon_ns, on_read)
+    for message in scan:
         try:
             data = json.loads(message.data)
         except ValueError:

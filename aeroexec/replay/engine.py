@@ -15,6 +15,7 @@ from __future__ import annotations
 import functools
 import os
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
@@ -26,12 +27,14 @@ from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
+from aeroexec.progress import ProgressFactory
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
 from aeroexec.replay.liveloop import is_live, replay_live
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S
+from aeroexec.replay.progress import ReplayedTime
 
 
 class Mode(str, Enum):
@@ -118,15 +121,20 @@ def choose_catalog(run: RecordedRun, path: str | None) -> ChosenCatalog:
     return ChosenCatalog(catalog, text, name)
 
 
-def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
+def replay_recording(
+    path: str | os.PathLike[str],
+    options: ReplayOptions,
+    progress: ProgressFactory | None = None,
+) -> ReplayResult:
     """Replay one recording and diff it against the original. Input problems raise
-    `AeroexecError` (unreadable, not MCAP, no mission commands, bad catalog)."""
+    `AeroexecError` (unreadable, not MCAP, no mission commands, bad catalog). `progress`
+    is told how far the read of the recording is, then the replay (`replay.progress`)."""
     if is_bag(path):  # a ROS 1 bag: replayed through a temporary import (aeroexec.bags)
         from aeroexec.bags.replay import replay_bag
 
         return replay_bag(path, options)
     name = str(path)
-    run = read_run(path)
+    run = read_run(path, progress=progress)
     notes: list[str] = []
     horizon = None
     if run.outcome.intact_until_ns is not None:
@@ -151,21 +159,30 @@ def replay_recording(path: str | os.PathLike[str], options: ReplayOptions) -> Re
     mode = choose_mode(run, options.mode)
     catalog = choose_catalog(run, options.catalog)
     behaviors = choose_behaviors(run, catalog, options.behaviors)
-    if mode is Mode.closed:
-        mission = load_mission(options.mission) if options.mission is not None else None
-        # A live flight cannot be flown again: its recorded vehicle stands in for it.
-        closed_loop = functools.partial(replay_live, path) if is_live(run) else replay_closed
-        replayed, how = closed_loop(
-            run,
-            catalog,
-            behaviors,
-            options.output,
-            horizon,
-            mission=mission,
-            trust_recording=options.trust_recording,
-        )
-    else:
-        replayed, how = replay_open(path, run, catalog, behaviors, options.output, horizon)
+    span_ms = max(1, ((run.outcome.end_ns or 0) - (run.outcome.start_ns or 0)) // 1_000_000)
+    bar = progress(f"replaying {Path(name).name}", span_ms) if progress else nullcontext(None)
+    with bar as advance:
+        watchers = [ReplayedTime(advance, span_ms)] if advance is not None else []
+        if mode is Mode.closed:
+            mission = load_mission(options.mission) if options.mission is not None else None
+            # A live flight cannot be flown again: its recorded vehicle stands in for it.
+            closed_loop = functools.partial(replay_live, path) if is_live(run) else replay_closed
+            replayed, how = closed_loop(
+                run,
+                catalog,
+                behaviors,
+                options.output,
+                horizon,
+                mission=mission,
+                trust_recording=options.trust_recording,
+                watchers=watchers,
+            )
+        else:
+            replayed, how = replay_open(
+                path, run, catalog, behaviors, options.output, horizon, watchers
+            )
+        for watcher in watchers:
+            watcher.finish()
     notes.extend(how)
     changed = code_changes(run.code, code_manifest(behaviors, catalog.catalog).metadata())
     if not run.code:
@@ -214,12 +231,14 @@ def _commands(count: int) -> str:
     return f"{count} command{'s' if count != 1 else ''}"
 
 
-def replay_file(path: str, options: ReplayOptions) -> ReplayResult:
+def replay_file(
+    path: str, options: ReplayOptions, progress: ProgressFactory | None = None
+) -> ReplayResult:
     """`replay_recording`, with input problems as a result (for batches and workers),
     and the time it took."""
     started = time.perf_counter()
     try:
-        result = replay_recording(path, options)
+        result = replay_recording(path, options, progress)
     except AeroexecError as exc:
         text = exc.message if exc.mark is not None and exc.mark.file == path else str(exc)
         result = ReplayResult(recording=path, error=text, mode=_mode_name(options))

@@ -42,6 +42,7 @@ from typing import Protocol
 
 from aeroexec import interrupts
 from aeroexec.errors import AeroexecError
+from aeroexec.progress import ProgressFactory
 from aeroexec.replay.engine import ReplayOptions, ReplayResult
 from aeroexec.replay.tasks import (
     Completed,
@@ -95,10 +96,14 @@ def usable_cpus() -> int:
 
 
 class InlineExecutor:
-    """One recording after the other, in this process (`--jobs 1`)."""
+    """One recording after the other, in this process (`--jobs 1`). `progress`: each
+    replay reports how far it is (`replay_recording`), for one big recording's bar."""
 
     name = LOCAL
     needs_absolute_paths = False
+
+    def __init__(self, progress: ProgressFactory | None = None) -> None:
+        self.progress = progress
 
     def __enter__(self) -> InlineExecutor:
         return self
@@ -108,7 +113,7 @@ class InlineExecutor:
 
     def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
         for task in tasks:
-            yield Completed(task.index, run_task(task))
+            yield Completed(task.index, run_task(task, self.progress))
 
 
 def _start_method() -> multiprocessing.context.BaseContext:

@@ -22,10 +22,11 @@ link is stopped at the same tick here; the commands the flight's ending issued a
 from __future__ import annotations
 
 import json
-from collections.abc import Generator, Iterator
+from collections.abc import Generator, Iterator, Sequence
 from pathlib import Path
 
 from aeroexec import __version__
+from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import DEFAULT_TICK_NS
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.api import MissionAPI
@@ -122,6 +123,7 @@ def replay_live(
     *,
     mission: MissionScript | None = None,
     trust_recording: bool = False,
+    watchers: Sequence[BusObserver] = (),
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay the live flight `run` (read from `path`) closed loop; outcome and notes.
 
@@ -156,7 +158,12 @@ def replay_live(
     if script is not None:
         attachments["mission.py"] = script.text
     _, observers, recorder = session_observers(
-        output, drone, metadata, attachments, [OutcomeObserver(builder)], code.records
+        output,
+        drone,
+        metadata,
+        attachments,
+        [OutcomeObserver(builder), *watchers],
+        code.records,
     )
     try:
         executive = Executive(

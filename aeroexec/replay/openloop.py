@@ -11,9 +11,11 @@ rejected, preemptions, capabilities and processes, timeouts.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 from aeroexec import __version__
+from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.session import end_recording, recording_session, session_observers
@@ -34,9 +36,11 @@ def replay_open(
     behaviors: BehaviorSet,
     output: str | Path | None,
     horizon_ns: int | None,
+    watchers: Sequence[BusObserver] = (),
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` (read from `path`) open loop; the replay's outcome and notes.
-    `behaviors` answer the situation checks the recording has no answer for."""
+    `behaviors` answer the situation checks the recording has no answer for; `watchers`
+    observe the replay's bus too (its progress)."""
     notes: list[str] = []
     recorded = run.outcome
     offset = recorded.start_ns or 0
@@ -62,7 +66,7 @@ def replay_open(
         drone,
         metadata,
         {"catalog.yaml": catalog.text},
-        [OutcomeObserver(builder, offset_ns=offset)],
+        [OutcomeObserver(builder, offset_ns=offset), *watchers],
     )
     try:
         with recording_session(recorder):

@@ -127,12 +127,14 @@ class RecordingSource:
         last: frozenset[str] = frozenset(),
         attachments: frozenset[str] = frozenset(),
         until_ns: int | None = None,
+        on_read: Callable[[int], None] | None = None,
     ) -> Iterator[SourceMessage]:
         """Messages of the channels `wanted(name)` accepts, in file order (JSON channels
         only). When the generator is exhausted, `summary` holds metadata, the named
         attachments, the time span, the last message of each `last` channel (logged
-        before `until_ns`, when given) and how the pass ended."""
-        walk = _Walk(self, wanted, last, attachments, until_ns)
+        before `until_ns`, when given) and how the pass ended. `on_read(offset)` is
+        told, record by record, how far into the file the pass is."""
+        walk = _Walk(self, wanted, last, attachments, until_ns, on_read)
         yield from walk.run()
         self.summary = walk.summary()
 
@@ -145,8 +147,10 @@ class _Walk:
         last: frozenset[str],
         attachment_names: frozenset[str],
         until_ns: int | None,
+        on_read: Callable[[int], None] | None = None,
     ) -> None:
         self.source = source
+        self.on_read = on_read
         self.until_ns = until_ns
         self.wanted = wanted
         self.last = last
@@ -212,8 +216,11 @@ class _Walk:
         stream.seek(_MAGIC_LENGTH)
         offset = _MAGIC_LENGTH
         pending: _Pending | None = None
+        on_read = self.on_read
         while True:
             check_interrupts()
+            if on_read is not None:
+                on_read(offset)
             prefix = stream.read(_PREFIX.size)
             if len(prefix) < _PREFIX.size:
                 if pending is not None:

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from aeroexec.errors import AeroexecError
+from aeroexec.progress import ProgressFactory
 from aeroexec.replay.engine import ReplayOptions, ReplayResult, output_for, replay_file
 from aeroexec.replay.remote import fetched, is_url
 
@@ -68,13 +69,14 @@ def make_tasks(
     return tasks
 
 
-def run_task(task: ReplayTask) -> ReplayResult:
-    """Replay one recording; every problem with it is its error result."""
+def run_task(task: ReplayTask, progress: ProgressFactory | None = None) -> ReplayResult:
+    """Replay one recording; every problem with it is its error result. `progress`: see
+    `replay_recording`."""
     try:
         if is_url(task.location):
             with fetched(task.location) as local:
-                return renamed(replay_file(local, task.options), local, task.recording)
-        result = replay_file(task.location, task.options)
+                return renamed(replay_file(local, task.options, progress), local, task.recording)
+        result = replay_file(task.location, task.options, progress)
         if task.location != task.recording:
             result = renamed(result, task.location, task.recording)
         return result

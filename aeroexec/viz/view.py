@@ -18,7 +18,7 @@ from __future__ import annotations
 import hashlib
 import os
 import uuid
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from contextlib import AbstractContextManager, ExitStack, contextmanager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,13 +27,13 @@ import rerun as rr
 
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.outputs import Pipe, whole_file_or_none
+from aeroexec.progress import Advance, ProgressFactory
 from aeroexec.recording.reader import Recording, open_recording
 from aeroexec.recording.schemas import MESSAGE_ENCODING, PROFILE
 from aeroexec.viz.blueprint import build_blueprint
 from aeroexec.viz.columns import ColumnWriter
 from aeroexec.viz.convert import PROGRESS_EVERY, ConvertStats, SessionConverter, session_origin_ns
 from aeroexec.viz.layout import Layout, layouts_for
-from aeroexec.viz.progress import Advance
 from aeroexec.viz.scene import (
     log_vehicle_body,
     log_view_coordinates,
@@ -44,9 +44,6 @@ from aeroexec.viz.scene import (
 
 APPLICATION_ID = "aeroexec"
 RRD_SUFFIX = ".rrd"
-
-#: `progress(description, total)` -> a context manager yielding `advance(n)`.
-ProgressFactory = Callable[[str, int], AbstractContextManager[Advance]]
 
 
 @dataclass(frozen=True, slots=True)
