@@ -4,11 +4,10 @@ in every loop, and without changing what the replay finds."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
+from progress_bars import Bars
 
 from aeroexec.cli import replay_cmd
 from aeroexec.replay.collect import read_run
@@ -16,25 +15,6 @@ from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
 
 REPO = Path(__file__).resolve().parent.parent
 RECORDING = REPO / "recordings" / "appendix_c-v0.1.0.mcap"
-
-
-class Bars:
-    """A progress factory that keeps [description, total, sum of advances, calls]."""
-
-    def __init__(self) -> None:
-        self.bars: list[list[object]] = []
-
-    @contextmanager
-    def __call__(self, description: str, total: int) -> Iterator[Callable[[int], None]]:
-        bar: list[object] = [description, total, 0, 0]
-        self.bars.append(bar)
-
-        def advance(n: int) -> None:
-            assert n > 0  # a bar never moves back or stands still on a call
-            bar[2] = int(bar[2]) + n  # type: ignore[call-overload]
-            bar[3] = int(bar[3]) + 1  # type: ignore[call-overload]
-
-        yield advance
 
 
 @pytest.mark.parametrize(
@@ -47,13 +27,15 @@ def test_a_replay_reports_its_read_then_its_rerun(mode: Mode, trust: bool) -> No
     bars = Bars()
     with_bars = replay_recording(RECORDING, options, bars)
     reading, replaying = bars.bars
-    assert reading[0] == f"reading {RECORDING.name}"
-    assert reading[1] == reading[2] == RECORDING.stat().st_size
+    assert reading.description == f"reading {RECORDING.name}"
+    assert reading.total == reading.done == RECORDING.stat().st_size
     outcome = read_run(RECORDING).outcome
     span_ms = ((outcome.end_ns or 0) - (outcome.start_ns or 0)) // 1_000_000
-    assert replaying[0] == f"replaying {RECORDING.name}"
-    assert replaying[1] == replaying[2] == span_ms > 10_000  # Appendix C flies for minutes
-    assert int(reading[3]) > 1 and int(replaying[3]) > 20  # type: ignore[call-overload]
+    assert replaying.description == f"replaying {RECORDING.name}"
+    assert replaying.total == replaying.done == span_ms > 10_000  # Appendix C: minutes
+    # Along the way, never back and never standing still on a call.
+    assert len(reading.steps) > 1 and len(replaying.steps) > 20
+    assert min(reading.steps + replaying.steps) > 0
     # Watching changes nothing the replay finds.
     assert with_bars == replay_recording(RECORDING, options)
 

@@ -13,8 +13,9 @@ and viewer.py and foxglove_layout.py need none of it.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from aeroexec.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from aeroexec.viz.blueprint import build_blueprint
@@ -47,11 +48,7 @@ _HOMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(f"aeroexec.viz.{home}"), name)
+__getattr__, __dir__ = lazy_exports(__name__, _HOMES, globals())
 
 
 __all__ = [
