@@ -8,54 +8,22 @@ from __future__ import annotations
 
 import math
 import signal
-import socket
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from live_helpers import free_udp_port, mavsim_thread, write_mission
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.executive.bus import MemoryObserver, TopicRecord
 from aeroexec.executive.clock import WallClock
-from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-@contextmanager
-def mavsim(port: int, **overrides: Any) -> Iterator[MavSim]:
-    settings: dict[str, Any] = {"speed_factor": 5.0, "heartbeat_hz": 4.0, "ekf_delay": 0.5}
-    settings.update(overrides)
-    sim = MavSim(MavSimConfig(url=f"udpout:127.0.0.1:{port}", **settings))
-    stop = threading.Event()
-    thread = threading.Thread(target=sim.run, args=(stop.is_set,), daemon=True)
-    thread.start()
-    try:
-        yield sim
-    finally:
-        stop.set()
-        thread.join(5)
-        sim.close()
-
-
-def write_mission(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "mission.py"
-    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
-    return path
-
 
 AIRBORNE = (
     "    api.executeBehavior('TAKE_OFF')\n"
@@ -72,7 +40,7 @@ def config(mission: Path, port: int, **overrides: Any) -> FlightConfig:
 
 def test_a_mission_that_returns_in_the_air_is_landed(tmp_path: Path) -> None:
     port = free_udp_port()
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
         result = fly(config(write_mission(tmp_path, AIRBORNE), port))
         final = sim.stats()["final"]
     assert result.outcome.value == "GOAL_ACHIEVED"
@@ -85,7 +53,7 @@ def test_a_mission_that_returns_in_the_air_is_landed(tmp_path: Path) -> None:
 def test_on_exit_hold_leaves_it_holding_and_exits_1(tmp_path: Path) -> None:
     port = free_udp_port()
     mission = write_mission(tmp_path, AIRBORNE)
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
         result = CliRunner().invoke(
             app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--on-exit", "hold"]
         )
@@ -104,7 +72,7 @@ def test_on_exit_hold_leaves_it_holding_and_exits_1(tmp_path: Path) -> None:
 def test_on_exit_none_commands_nothing(tmp_path: Path) -> None:
     port = free_udp_port()
     traffic = MemoryObserver()
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
         result = fly(
             config(write_mission(tmp_path, AIRBORNE), port, on_exit="none"), observers=[traffic]
         )
@@ -134,7 +102,7 @@ def test_a_mission_that_raises_in_the_air_is_landed_and_fails(tmp_path: Path) ->
     mission = write_mission(
         tmp_path, "    api.executeBehavior('TAKE_OFF')\n    raise RuntimeError('lost my way')\n"
     )
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
         result = CliRunner().invoke(
             app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
         )
@@ -155,7 +123,7 @@ def test_behaviors_still_active_are_inhibited_before_landing(tmp_path: Path) -> 
         "    api.executeBehavior('TAKE_OFF')\n"
         "    return api.activateBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n",
     )
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
         result = fly(config(mission, port))
         final = sim.stats()["final"]
     assert result.ending is not None
@@ -171,7 +139,7 @@ def test_a_vehicle_a_pilot_took_over_is_left_to_the_pilot(tmp_path: Path) -> Non
         tmp_path,
         "    api.executeBehavior('TAKE_OFF')\n    return api.executeBehavior('WAIT', duration=2)\n",
     )
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
 
         def pilot() -> None:
             while not sim.flying:
@@ -202,7 +170,7 @@ def test_a_link_lost_longer_than_link_timeout_stops_the_mission(tmp_path: Path) 
         "    return api.executeBehavior('WAIT', duration=60)\n",
     )
     traffic = MemoryObserver()
-    with mavsim(port, drop_heartbeats_at=0.5, drop_for=60):
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", drop_heartbeats_at=0.5, drop_for=60):
         started = time.monotonic()
         result = fly(
             config(mission, port, heartbeat_timeout=0.5, link_timeout=1.0), observers=[traffic]
@@ -229,7 +197,9 @@ def test_the_rtl_failsafe_flies_home_and_lands(tmp_path: Path) -> None:
         "    api.executeBehavior('TAKE_OFF')\n"
         "    return api.executeBehavior('GO_TO_POINT', coordinates=[0, 12, 1])\n",
     )
-    with mavsim(port, drop_heartbeats_at=1.0, drop_for=1.5, rtl_altitude=3.0) as sim:
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", drop_heartbeats_at=1.0, drop_for=1.5, rtl_altitude=3.0
+    ) as sim:
         result = fly(config(mission, port, heartbeat_timeout=0.5, failsafe="rtl"))
         final = sim.stats()["final"]
     assert result.outcome.value == "PROCESS_FAILURE"  # GO_TO_POINT: vehicle fault: link_lost
@@ -252,7 +222,7 @@ def test_sigterm_mid_flight_lands_finalizes_the_recording_and_exits_143(tmp_path
         "    return api.executeBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n",
     )
     args = ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--output", str(record)]
-    with mavsim(port) as sim:
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
         proc = subprocess.Popen(
             [sys.executable, "-m", "aeroexec", *args],
             stdout=subprocess.PIPE,

@@ -7,12 +7,8 @@ timeouts) and killed at teardown if still alive.
 from __future__ import annotations
 
 import json
-import queue
 import random
-import signal
 import socket
-import subprocess
-import sys
 import threading
 import time
 from collections import Counter
@@ -21,6 +17,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from live_helpers import AeroexecProcess as Proc
+from live_helpers import free_udp_port, write_mission
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from typer.testing import CliRunner
 
@@ -34,77 +32,8 @@ from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
 
-PY = sys.executable
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 SPEED = "5"  # mavsim runs the vehicle 5x faster than the wall clock ...
 HEARTBEAT_HZ = "4"  # ... and beats 4 times a second, so arming and modes show sooner
-
-
-class Proc:
-    """A subprocess whose stdout lines are collected by a thread (so the test can wait
-    for one without blocking forever)."""
-
-    def __init__(self, args: list[str]) -> None:
-        self.popen = subprocess.Popen(
-            [PY, "-m", "aeroexec", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        self.lines: queue.Queue[str] = queue.Queue()
-        self.out: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        assert self.popen.stdout is not None
-        for line in self.popen.stdout:
-            self.out.append(line)
-            self.lines.put(line)
-
-    def wait_for(self, text: str, timeout: float = 15.0) -> str:
-        deadline = time.monotonic() + timeout
-        while True:
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                raise AssertionError(f"no line with {text!r}; got {''.join(self.out)}")
-            try:
-                line = self.lines.get(timeout=remaining)
-            except queue.Empty:
-                continue
-            if text in line:
-                return line
-
-    def finish(self, timeout: float = 40.0) -> tuple[int, str, str]:
-        assert self.popen.stderr is not None
-        code = self.popen.wait(timeout)
-        err = self.popen.stderr.read()
-        self._reader.join(5)
-        return code, "".join(self.out), err
-
-    def stop(self) -> None:
-        if self.popen.poll() is None:
-            self.popen.send_signal(signal.SIGTERM)
-            try:
-                self.popen.wait(10)
-            except subprocess.TimeoutExpired:
-                self.popen.kill()
-                self.popen.wait(5)
-
-    def kill(self) -> None:
-        if self.popen.poll() is None:
-            self.popen.kill()
-            self.popen.wait(5)
-        for stream in (self.popen.stdout, self.popen.stderr):
-            if stream is not None:
-                stream.close()
 
 
 @pytest.fixture
@@ -142,12 +71,6 @@ def stop_mavsim(proc: Proc, stats: Path) -> dict[str, Any]:
     proc.stop()
     assert proc.popen.returncode == 0
     return json.loads(stats.read_text())
-
-
-def write_mission(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "mission.py"
-    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
-    return path
 
 
 # -- the thesis' mission, end to end, recorded ---------------------------------------------------

@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 import os
 import select
-import socket
 import threading
 import time
 import tty
@@ -19,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from live_helpers import free_tcp_port, free_udp_port, mavsim_thread, write_mission
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from typer.testing import CliRunner
 
@@ -28,48 +28,10 @@ from aeroexec.executive.bus import MemoryObserver
 from aeroexec.mavlink.codec import Decoder, new_codec
 from aeroexec.mavlink.endpoint import parse_endpoint
 from aeroexec.mavlink.link import Link
-from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
 from aeroexec.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.vehicles.base import VehicleState
 from aeroexec.vehicles.beliefs_feed import update_beliefs
-
-
-def free_tcp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-@contextmanager
-def mavsim(url: str, **overrides: Any) -> Iterator[MavSim]:
-    """A MavSim serving `url` from a thread (5x speed, 4 Hz heartbeats, EKF ready after
-    0.5 vehicle seconds)."""
-    settings: dict[str, Any] = {"speed_factor": 5.0, "heartbeat_hz": 4.0, "ekf_delay": 0.5}
-    settings.update(overrides)
-    sim = MavSim(MavSimConfig(url=url, **settings))
-    stop = threading.Event()
-    thread = threading.Thread(target=sim.run, args=(stop.is_set,), daemon=True)
-    thread.start()
-    try:
-        yield sim
-    finally:
-        stop.set()
-        thread.join(5)
-        sim.close()
-
-
-def write_mission(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "mission.py"
-    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
-    return path
-
 
 SHORT_FLIGHT = (
     "    return [api.executeBehavior('TAKE_OFF'),\n"
@@ -86,7 +48,7 @@ def test_a_flight_over_tcp_from_either_side(tmp_path: Path, ground: str, vehicle
     port = free_tcp_port()
     mission = write_mission(tmp_path, SHORT_FLIGHT)
     traffic = MemoryObserver()
-    with mavsim(f"{vehicle}:127.0.0.1:{port}") as sim:
+    with mavsim_thread(f"{vehicle}:127.0.0.1:{port}") as sim:
         result = fly(
             FlightConfig(mission=mission, connect=f"{ground}:127.0.0.1:{port}", connect_timeout=5),
             observers=[traffic],
@@ -116,7 +78,7 @@ def test_a_dropped_tcp_connection_is_a_loss_at_once_and_comes_back(tmp_path: Pat
     events: list[dict[str, Any]] = []
     vehicle.tap = lambda topic, data: events.append(data) if topic == "mavlink/link" else None
     try:
-        with mavsim(f"tcpin:127.0.0.1:{port}"):
+        with mavsim_thread(f"tcpin:127.0.0.1:{port}"):
             vehicle.connect()
             vehicle.step(0.1)
         # The autopilot's end closed: no need to wait 3 s for a missing heartbeat.
@@ -128,7 +90,7 @@ def test_a_dropped_tcp_connection_is_a_loss_at_once_and_comes_back(tmp_path: Pat
         assert vehicle.link_lost and vehicle.state().fault == "link_lost"
         assert detected < 1.0
         # It listens again (an autopilot rebooted): the link reconnects by itself.
-        with mavsim(f"tcpin:127.0.0.1:{port}"):
+        with mavsim_thread(f"tcpin:127.0.0.1:{port}"):
             deadline = time.monotonic() + 5.0
             while vehicle.link_lost and time.monotonic() < deadline:
                 vehicle.step(0.1)
@@ -194,7 +156,7 @@ def null_modem() -> Iterator[tuple[str, str]]:
 
 def test_a_flight_over_a_serial_line(tmp_path: Path) -> None:
     mission = write_mission(tmp_path, SHORT_FLIGHT)
-    with null_modem() as (ground, vehicle), mavsim(f"{vehicle},57600"):
+    with null_modem() as (ground, vehicle), mavsim_thread(f"{vehicle},57600"):
         # Without --allow-remote: a serial device is local.
         result = fly(FlightConfig(mission=mission, connect=ground, baud=57600, connect_timeout=5))
     assert result.outcome.value == ["GOAL_ACHIEVED"] * 3

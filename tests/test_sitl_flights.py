@@ -17,12 +17,9 @@ from __future__ import annotations
 
 import itertools
 import os
-import queue
 import select
 import signal
-import socket
 import subprocess
-import sys
 import threading
 import time
 import tty
@@ -32,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from live_helpers import AeroexecProcess, free_tcp_port, free_udp_port, write_mission
 
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.recording import open_recording
@@ -159,52 +157,14 @@ class Monitor:
         self.conn.close()
 
 
-class Fly:
-    """`aeroexec fly` in a subprocess; stdout lines are collected by a thread."""
+class Fly(AeroexecProcess):
+    """`aeroexec fly` in a subprocess (SITL flights take their time)."""
+
+    wait_s = 120.0
+    finish_s = 180.0
 
     def __init__(self, args: list[str]) -> None:
-        self.popen = subprocess.Popen(
-            [sys.executable, "-m", "aeroexec", "fly", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        self.lines: queue.Queue[str] = queue.Queue()
-        self.out: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        assert self.popen.stdout is not None
-        for line in self.popen.stdout:
-            self.out.append(line)
-            self.lines.put(line)
-
-    def wait_for(self, text: str, timeout: float = 120.0) -> str:
-        deadline = time.monotonic() + timeout
-        while (remaining := deadline - time.monotonic()) > 0:
-            try:
-                line = self.lines.get(timeout=remaining)
-            except queue.Empty:
-                break
-            if text in line:
-                return line
-        raise AssertionError(f"no line with {text!r}; fly printed:\n{''.join(self.out)}")
-
-    def finish(self, timeout: float = 180.0) -> tuple[int, str, str]:
-        assert self.popen.stderr is not None
-        code = self.popen.wait(timeout)
-        err = self.popen.stderr.read()
-        self._reader.join(5)
-        return code, "".join(self.out), err
-
-    def kill(self) -> None:
-        if self.popen.poll() is None:
-            self.popen.kill()
-            self.popen.wait(5)
-        for stream in (self.popen.stdout, self.popen.stderr):
-            if stream is not None:
-                stream.close()
+        super().__init__(["fly", *args])
 
 
 @pytest.fixture
@@ -225,24 +185,6 @@ def flight(tmp_path: Path) -> Iterator[Callable[..., Any]]:
             thing.stop()
         else:
             thing.close()
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def free_tcp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def write_mission(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "mission.py"
-    path.write_text("import executive_engine_api as api\n\n\ndef runMission():\n" + body)
-    return path
 
 
 def fly_args(mission: Path, url: str, record: Path, *extra: str) -> list[str]:
