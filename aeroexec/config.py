@@ -20,7 +20,6 @@ defaults. A malformed file is a `ConfigError` naming the file and line.
 from __future__ import annotations
 
 import re
-import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,10 +96,7 @@ _POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
 
 def _read(path: Path) -> dict[str, Any]:
     # Imported here: most commands run where no configuration file exists.
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover - exercised on Python 3.10 only
-        import tomli as tomllib
+    import tomllib
 
     try:
         text = path.read_text(encoding="utf-8")

@@ -10,7 +10,7 @@ import re
 import shutil
 import time
 import xml.etree.ElementTree as ET
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
@@ -39,7 +39,7 @@ def _cli(*args: str, env: dict[str, str] | None = None) -> tuple[int, str, str]:
 
 
 def test_replay_testcases_name_their_recording_and_duration(flights: Path) -> None:
-    before = datetime.now(timezone.utc).replace(microsecond=0, tzinfo=None)
+    before = datetime.now(UTC).replace(microsecond=0, tzinfo=None)
     code, out, _ = _cli(
         "replay",
         str(flights),
@@ -47,7 +47,7 @@ def test_replay_testcases_name_their_recording_and_duration(flights: Path) -> No
         "junit",
         env={"SOURCE_DATE_EPOCH": None},  # type: ignore[dict-item]
     )
-    after = datetime.now(timezone.utc).replace(tzinfo=None)
+    after = datetime.now(UTC).replace(tzinfo=None)
     assert code == 2  # c.mcap is unreadable
     suite = ET.fromstring(out)
     cases = suite.findall("testcase")

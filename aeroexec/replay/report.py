@@ -23,7 +23,7 @@ import time
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 
 from aeroexec.errors import AeroexecError
 from aeroexec.replay.diff import DiffResult
@@ -65,7 +65,7 @@ def start_timing(environ: Mapping[str, str] | None = None, now: float | None = N
 
 def _iso(seconds: float) -> str:
     # JUnit's schema wants a local date-time without zone; aeroexec writes UTC.
-    instant = datetime.fromtimestamp(int(seconds), tz=timezone.utc)
+    instant = datetime.fromtimestamp(int(seconds), tz=UTC)
     return instant.strftime("%Y-%m-%dT%H:%M:%S")
 
 
