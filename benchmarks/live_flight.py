@@ -40,10 +40,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from aeroexec.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
+from aeroexec.vehicles.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 
 REPO = Path(__file__).resolve().parents[1]
 BINARY = Path(os.environ.get("AEROEXEC_SITL") or REPO.parent / "shared" / "sitl" / "arducopter")

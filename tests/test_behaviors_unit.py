@@ -16,8 +16,8 @@ from aeroexec.behaviors import STANDARD_LIBRARY
 from aeroexec.behaviors._support import ProgressWatch
 from aeroexec.catalog import Catalog, load_catalog
 from aeroexec.executive import BehaviorEvent, Beliefs, EventCode, Executive, MemoryObserver
+from aeroexec.executive.beliefs_feed import update_beliefs
 from aeroexec.vehicles import SimVehicle, VehicleState, World, default_world
-from aeroexec.vehicles.beliefs_feed import update_beliefs
 from aeroexec.vehicles.world import BatteryModel, Marker, MovingObject, ScheduledFailure
 
 CATALOG_PATH = Path(__file__).resolve().parent.parent / "catalog" / "default.yaml"

@@ -24,13 +24,13 @@ from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.executive.bus import MemoryObserver
-from aeroexec.mavlink.codec import new_codec
 from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
+from aeroexec.vehicles.mavlink.codec import new_codec
 
 SPEED = "5"  # mavsim runs the vehicle 5x faster than the wall clock ...
 HEARTBEAT_HZ = "4"  # ... and beats 4 times a second, so arming and modes show sooner

@@ -24,14 +24,14 @@ from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.executive.beliefs import Beliefs
+from aeroexec.executive.beliefs_feed import update_beliefs
 from aeroexec.executive.bus import MemoryObserver
-from aeroexec.mavlink.codec import Decoder, new_codec
-from aeroexec.mavlink.endpoint import parse_endpoint
-from aeroexec.mavlink.link import Link
-from aeroexec.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.vehicles.base import VehicleState
-from aeroexec.vehicles.beliefs_feed import update_beliefs
+from aeroexec.vehicles.mavlink.codec import Decoder, new_codec
+from aeroexec.vehicles.mavlink.endpoint import parse_endpoint
+from aeroexec.vehicles.mavlink.link import Link
+from aeroexec.vehicles.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 
 SHORT_FLIGHT = (
     "    return [api.executeBehavior('TAKE_OFF'),\n"

@@ -25,7 +25,11 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from aeroexec.mavlink.codec import (
+from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
+from aeroexec.mavlink.tlog import read_tlog
+from aeroexec.vehicles.base import Vehicle, VehicleCommandError
+from aeroexec.vehicles.mavlink import MavlinkConfig, MavlinkVehicle
+from aeroexec.vehicles.mavlink.codec import (
     Decoder,
     command_number,
     json_safe,
@@ -33,7 +37,7 @@ from aeroexec.mavlink.codec import (
     packet_record,
     signing_key,
 )
-from aeroexec.mavlink.convert import (
+from aeroexec.vehicles.mavlink.convert import (
     COPTER_MODES,
     enu_to_ned,
     heading_degrees,
@@ -41,13 +45,9 @@ from aeroexec.mavlink.convert import (
     yaw_enu_to_ned,
     yaw_ned_to_enu,
 )
-from aeroexec.mavlink.endpoint import MavlinkError, parse_endpoint
-from aeroexec.mavlink.link import Link
-from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
-from aeroexec.mavlink.telemetry import Telemetry
-from aeroexec.mavlink.tlog import read_tlog
-from aeroexec.vehicles.base import Vehicle, VehicleCommandError
-from aeroexec.vehicles.mavlink import MavlinkConfig, MavlinkVehicle
+from aeroexec.vehicles.mavlink.endpoint import MavlinkError, parse_endpoint
+from aeroexec.vehicles.mavlink.link import Link
+from aeroexec.vehicles.mavlink.telemetry import Telemetry
 
 FIXTURES = Path(__file__).parent / "fixtures" / "mavlink"
 TLOG = FIXTURES / "arducopter_flight_window.tlog"

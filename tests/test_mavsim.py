@@ -16,8 +16,8 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
-from aeroexec.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 from aeroexec.vehicles.base import VehicleCommandError
+from aeroexec.vehicles.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 
 
 def free_udp_port() -> int:

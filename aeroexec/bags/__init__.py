@@ -7,7 +7,7 @@ and let `info` and `replay` take them directly. See docs/bags.md.
 - `open_bag(path)` (bagfile.py): a checked, streaming reader; `is_bag(path)`;
 - `bag_info(path)` (info.py): what `aeroexec info BAG` prints;
 - `bag_recording(path)` (replay.py): a bag imported to a temporary recording, for the
-  replay engine (which calls `replay_bag` for `.bag` inputs);
+  replay engine (its `replay_bag` for `.bag` inputs) and `view`;
 - `aerostack_typestore()` (types.py): rosbags' Noetic store plus Aerostack's types.
 """
 

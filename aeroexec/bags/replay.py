@@ -1,9 +1,9 @@
-"""Replay a ROS 1 bag: import it into a temporary recording, replay that (open loop by
-default: a bag is a real flight), report under the bag's name.
+"""A ROS 1 bag as a temporary aeroexec recording, for the tools that read recordings only.
 
-The replay engine reads aeroexec recordings only; `bag_recording` is the bridge any
-caller can use (`with bag_recording("flight.bag") as imported: ...`), and `replay_bag`
-is what `aeroexec.replay.engine.replay_recording` calls for a bag.
+`bag_recording` is the bridge any caller can use (`with bag_recording("flight.bag") as
+imported: ...`): `aeroexec.replay.engine.replay_bag` replays a bag through it (open loop
+by default: a bag is a real flight) and reports under the bag's name, and `view` shows
+one through it.
 """
 
 from __future__ import annotations
@@ -12,16 +12,11 @@ import os
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from aeroexec.bags.importer import ImportReport, import_bag
 from aeroexec.bags.mapping import Mapping
-from aeroexec.errors import AeroexecError, Mark, RecordingError
-
-if TYPE_CHECKING:
-    from aeroexec.replay.engine import ReplayOptions, ReplayResult
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,39 +41,3 @@ def bag_recording(
         target = Path(folder) / (Path(bag).stem + ".mcap")
         report = import_bag(bag, target, mapping=mapping, drone=drone)
         yield ImportedBag(str(bag), target, report)
-
-
-def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:
-    """The same error, naming the bag instead of the temporary recording."""
-    if exc.mark is None or exc.mark.file != str(temp):
-        return exc
-    mark = replace(exc.mark, file=bag)
-    return type(exc)(exc.message, mark)
-
-
-def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
-    """`replay_recording` for a bag (imported with the shipped Aerostack mapping)."""
-    from aeroexec.replay.engine import replay_recording
-
-    with bag_recording(path) as imported:
-        if not imported.report.derived.get("mission/command"):
-            raise RecordingError(
-                "no behavior commands to replay: the bag has none of the behavior topics "
-                "the Aerostack mapping knows (behavior_event, list_of_active_behaviors, "
-                "command topics); `aeroexec import --mapping` then replay the .mcap",
-                Mark(str(path)),
-            )
-        try:
-            result = replay_recording(imported.path, options)
-        except AeroexecError as exc:
-            raise _renamed(exc, imported.path, str(path)) from None
-    notes = [f"imported from the bag: {note}" for note in imported.report.notes]
-    reconstructed = (
-        imported.report.reconstructed_activations + imported.report.reconstructed_inhibitions
-    )
-    if reconstructed:
-        notes.append(
-            f"{reconstructed} of the recorded commands were reconstructed from the bag's "
-            "active-behavior list (bags hold no service calls)"
-        )
-    return replace(result, recording=str(path), notes=(*result.notes, *notes))

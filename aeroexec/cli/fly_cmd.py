@@ -33,10 +33,10 @@ from aeroexec.cli.project import (
     project_behaviors,
 )
 from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome, silenced
-from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
-from aeroexec.mavlink.vehicle import MavlinkVehicle
 from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
+from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
+from aeroexec.vehicles.mavlink.vehicle import MavlinkVehicle
 
 
 class Failsafe(str, Enum):

@@ -11,9 +11,9 @@ import typer
 
 from aeroexec.cli.app import app, guarded
 from aeroexec.cli.options import allow_remote_option, connect_option, world_option
-from aeroexec.mavlink.codec import signing_key as make_key
-from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, MavlinkError
 from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig, refuse_numbers
+from aeroexec.vehicles.mavlink.codec import signing_key as make_key
+from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, MavlinkError
 
 
 @app.command("mavsim")

@@ -24,6 +24,7 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.errors import BehaviorError
 from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.beliefs import Beliefs
+from aeroexec.executive.beliefs_feed import update_beliefs
 from aeroexec.executive.bus import Bus, BusObserver
 from aeroexec.executive.clock import NS_PER_S, Clock, SimClock
 from aeroexec.executive.coordinator import BehaviorCoordinator
@@ -88,8 +89,6 @@ class Executive:
         self.vehicle: Vehicle = vehicle if vehicle is not None else _default_vehicle()
         self.beliefs = Beliefs(self._belief_changed)
         # Bound once: the feed runs every tick.
-        from aeroexec.vehicles.beliefs_feed import update_beliefs
-
         self._update_beliefs = update_beliefs
         #: (vehicle state, belief store version) after the last feed: fed again with the
         #: same state and untouched beliefs, the feed would change nothing.

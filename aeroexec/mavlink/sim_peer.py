@@ -45,8 +45,14 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from aeroexec.mavlink.codec import MAVLinkMessage, command_name, command_number, result_name
-from aeroexec.mavlink.convert import (
+from aeroexec.vehicles.base import Vec3, VehicleCommandError
+from aeroexec.vehicles.mavlink.codec import (
+    MAVLinkMessage,
+    command_name,
+    command_number,
+    result_name,
+)
+from aeroexec.vehicles.mavlink.convert import (
     COPTER_MODES,
     GUIDED,
     LAND,
@@ -58,9 +64,8 @@ from aeroexec.mavlink.convert import (
     yaw_enu_to_ned,
     yaw_ned_to_enu,
 )
-from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, parse_endpoint
-from aeroexec.mavlink.link import Link
-from aeroexec.vehicles.base import Vec3, VehicleCommandError
+from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, parse_endpoint
+from aeroexec.vehicles.mavlink.link import Link
 
 #: Modes mavsim can be put in; in the air all but LAND and RTL brake and hold.
 SUPPORTED_MODES = (STABILIZE, GUIDED, 5, RTL, LAND, 16, 17)  # + LOITER, POSHOLD, BRAKE

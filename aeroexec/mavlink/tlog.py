@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from aeroexec.mavlink.codec import Decoder, MAVLinkMessage, Rejected, new_codec
+from aeroexec.vehicles.mavlink.codec import Decoder, MAVLinkMessage, Rejected, new_codec
 
 _V1, _V2 = 0xFE, 0xFD
 

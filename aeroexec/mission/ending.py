@@ -30,9 +30,9 @@ from typing import Literal
 
 from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
-from aeroexec.mavlink.vehicle import LinkTimeout, MavlinkVehicle
 from aeroexec.mission.api import MissionAPI
 from aeroexec.vehicles.base import VehicleCommandError
+from aeroexec.vehicles.mavlink.vehicle import LinkTimeout, MavlinkVehicle
 
 OnExit = Literal["land", "hold", "none"]
 ON_EXIT: tuple[OnExit, ...] = ("land", "hold", "none")

@@ -32,15 +32,6 @@ from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import WallClock
 from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
-from aeroexec.mavlink.codec import signing_key
-from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL, MavlinkError, parse_endpoint
-from aeroexec.mavlink.vehicle import (
-    FAILSAFES,
-    Failsafe,
-    LinkTimeout,
-    MavlinkConfig,
-    MavlinkVehicle,
-)
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.ending import ON_EXIT, Ending, OnExit, end_flight
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
@@ -51,6 +42,20 @@ from aeroexec.mission.session import (
     stand_in_metadata,
 )
 from aeroexec.plugins.discovery import BehaviorSet
+from aeroexec.vehicles.mavlink.codec import signing_key
+from aeroexec.vehicles.mavlink.endpoint import (
+    DEFAULT_BAUD,
+    DEFAULT_GCS_URL,
+    MavlinkError,
+    parse_endpoint,
+)
+from aeroexec.vehicles.mavlink.vehicle import (
+    FAILSAFES,
+    Failsafe,
+    LinkTimeout,
+    MavlinkConfig,
+    MavlinkVehicle,
+)
 
 
 @dataclass(frozen=True)

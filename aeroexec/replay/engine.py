@@ -22,8 +22,9 @@ from pathlib import Path
 from typing import Any
 
 from aeroexec.bags.bagfile import is_bag
+from aeroexec.bags.replay import bag_recording
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
-from aeroexec.errors import AeroexecError, CatalogError, Mark
+from aeroexec.errors import AeroexecError, CatalogError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
@@ -130,8 +131,6 @@ def replay_recording(
     `AeroexecError` (unreadable, not MCAP, no mission commands, bad catalog). `progress`
     is told how far the read of the recording is, then the replay (`replay.progress`)."""
     if is_bag(path):  # a ROS 1 bag: replayed through a temporary import (aeroexec.bags)
-        from aeroexec.bags.replay import replay_bag
-
         return replay_bag(path, options)
     name = str(path)
     run = read_run(path, progress=progress)
@@ -208,6 +207,40 @@ def replay_recording(
         notes=tuple(notes),
         code_changes=changed,
     )
+
+
+def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:
+    """The same error, naming the bag instead of the temporary recording."""
+    if exc.mark is None or exc.mark.file != str(temp):
+        return exc
+    mark = replace(exc.mark, file=bag)
+    return type(exc)(exc.message, mark)
+
+
+def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
+    """`replay_recording` for a bag (imported with the shipped Aerostack mapping)."""
+    with bag_recording(path) as imported:
+        if not imported.report.derived.get("mission/command"):
+            raise RecordingError(
+                "no behavior commands to replay: the bag has none of the behavior topics "
+                "the Aerostack mapping knows (behavior_event, list_of_active_behaviors, "
+                "command topics); `aeroexec import --mapping` then replay the .mcap",
+                Mark(str(path)),
+            )
+        try:
+            result = replay_recording(imported.path, options)
+        except AeroexecError as exc:
+            raise _renamed(exc, imported.path, str(path)) from None
+    notes = [f"imported from the bag: {note}" for note in imported.report.notes]
+    reconstructed = (
+        imported.report.reconstructed_activations + imported.report.reconstructed_inhibitions
+    )
+    if reconstructed:
+        notes.append(
+            f"{reconstructed} of the recorded commands were reconstructed from the bag's "
+            "active-behavior list (bags hold no service calls)"
+        )
+    return replace(result, recording=str(path), notes=(*result.notes, *notes))
 
 
 def choose_behaviors(

@@ -35,8 +35,9 @@ from typing import Any, Literal
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from aeroexec.interrupts import check as check_interrupts
-from aeroexec.mavlink.codec import MAVLinkMessage, command_name, result_name
-from aeroexec.mavlink.convert import (
+from aeroexec.vehicles.base import VehicleCommandError, VehicleState
+from aeroexec.vehicles.mavlink.codec import MAVLinkMessage, command_name, result_name
+from aeroexec.vehicles.mavlink.convert import (
     GUIDED,
     LAND,
     RTL,
@@ -45,10 +46,14 @@ from aeroexec.mavlink.convert import (
     mode_name,
     yaw_enu_to_ned,
 )
-from aeroexec.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL, MavlinkError, parse_endpoint
-from aeroexec.mavlink.link import Link, LinkStats, Received
-from aeroexec.mavlink.telemetry import Telemetry, is_autopilot_heartbeat, unbelievable
-from aeroexec.vehicles.base import VehicleCommandError, VehicleState
+from aeroexec.vehicles.mavlink.endpoint import (
+    DEFAULT_BAUD,
+    DEFAULT_GCS_URL,
+    MavlinkError,
+    parse_endpoint,
+)
+from aeroexec.vehicles.mavlink.link import Link, LinkStats, Received
+from aeroexec.vehicles.mavlink.telemetry import Telemetry, is_autopilot_heartbeat, unbelievable
 
 Failsafe = Literal["land", "hold", "rtl"]
 FAILSAFES: tuple[Failsafe, ...] = ("land", "hold", "rtl")

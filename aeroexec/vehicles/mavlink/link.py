@@ -24,9 +24,15 @@ from typing import Any
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from aeroexec.mavlink.codec import Decoder, MAVLinkMessage, Rejected, new_codec, packet_record
-from aeroexec.mavlink.endpoint import Endpoint
-from aeroexec.mavlink.transport import Address, EventSink, open_transport
+from aeroexec.vehicles.mavlink.codec import (
+    Decoder,
+    MAVLinkMessage,
+    Rejected,
+    new_codec,
+    packet_record,
+)
+from aeroexec.vehicles.mavlink.endpoint import Endpoint
+from aeroexec.vehicles.mavlink.transport import Address, EventSink, open_transport
 
 Tap = Callable[[str, Any], None]
 

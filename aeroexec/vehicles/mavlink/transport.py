@@ -7,8 +7,8 @@ sender's address (datagrams from a stranger cannot be told from the autopilot's)
 `write` sends to every address that ever sent it a datagram (a stranger spraying
 garbage at the port would receive our commands), and it is IPv4 only.
 
-`StreamTransport` drives pymavlink's own TCP and serial classes (`aeroexec.mavlink.
-streams`). A stream can go away (the autopilot rebooted, a cable was pulled, SITL was
+`StreamTransport` drives pymavlink's own TCP and serial classes (`aeroexec.vehicles.
+mavlink.streams`). A stream can go away (the autopilot rebooted, a cable was pulled, SITL was
 killed): the transport then reopens it, at most every `RETRY_PERIOD` seconds, for as
 long as the owner keeps polling; `tcpin` goes back to accepting the next client.
 
@@ -24,7 +24,7 @@ import time
 from collections.abc import Callable
 from typing import Any, Protocol
 
-from aeroexec.mavlink.endpoint import Endpoint, MavlinkError
+from aeroexec.vehicles.mavlink.endpoint import Endpoint, MavlinkError
 
 Address = tuple[str, int]
 #: Told "open" / "closed" (with a detail) when a stream connection comes or goes.
@@ -203,7 +203,7 @@ class StreamTransport:
 
     def _open(self, *, raise_errors: bool) -> None:
         self._next_attempt = self._clock() + RETRY_PERIOD
-        from aeroexec.mavlink.streams import open_stream
+        from aeroexec.vehicles.mavlink.streams import open_stream
 
         try:
             self._conn = open_stream(
@@ -281,7 +281,7 @@ class StreamTransport:
             ready = False
         if not ready:
             return []
-        from aeroexec.mavlink.streams import CHUNK
+        from aeroexec.vehicles.mavlink.streams import CHUNK
 
         try:
             data = conn.recv(CHUNK)

@@ -22,7 +22,7 @@ from typing import Any
 
 from pymavlink import mavutil
 
-from aeroexec.mavlink.endpoint import Endpoint
+from aeroexec.vehicles.mavlink.endpoint import Endpoint
 
 #: Bytes read per call (a few hundred packets): small enough to keep steps short.
 CHUNK = 16384

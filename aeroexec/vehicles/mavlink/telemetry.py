@@ -4,7 +4,7 @@
 believes about the vehicle (and so its beliefs: `flying(self)`, `position(self, ...)`,
 `battery_level(self, ...)`): HEARTBEAT (armed, mode), LOCAL_POSITION_NED (position and
 velocity), ATTITUDE (yaw), SYS_STATUS (battery), EXTENDED_SYS_STATE (landed state).
-Frames are converted here, once (see `aeroexec.mavlink.convert`).
+Frames are converted here, once (see `aeroexec.vehicles.mavlink.convert`).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from aeroexec.mavlink.codec import MAVLinkMessage
-from aeroexec.mavlink.convert import Vec3, mode_name, ned_to_enu, yaw_ned_to_enu
 from aeroexec.vehicles.base import VehicleState
+from aeroexec.vehicles.mavlink.codec import MAVLinkMessage
+from aeroexec.vehicles.mavlink.convert import Vec3, mode_name, ned_to_enu, yaw_ned_to_enu
 
 #: Without EXTENDED_SYS_STATE, an armed vehicle above this height (m) counts as flying.
 FLYING_ALTITUDE = 0.3
