@@ -56,8 +56,9 @@ FORCE_AFTER_S = 1.5
 #: A watchdog that finds the main thread inside a critical file tries again this soon.
 RETRY_S = 0.005
 
-#: The signal waiting to be raised (by `check()` or the watchdog).
+#: The signal waiting to be raised (by `check()` or the watchdog), and when it came.
 _pending: int | None = None
+_pending_at = 0.0
 #: The signal that asked this process to stop, and when (it stays until the block ends).
 _signal: int | None = None
 _signal_at = 0.0
@@ -211,18 +212,20 @@ def user_code(
 
 # -- the handlers ---------------------------------------------------------------------------
 def _note(signum: int, frame: FrameType | None) -> None:
-    global _pending, _signal, _signal_at
+    global _pending, _pending_at, _signal, _signal_at
+    now = time.monotonic()
     if _signal is None:
-        _signal, _signal_at = signum, time.monotonic()
-        _pending = signum
-        _schedule()
-        return
-    if _pending == signum and not _worker and not _in_critical(frame):
+        _signal, _signal_at = signum, now
+        _pending, _pending_at = signum, now
+    elif _pending == signum and not _worker and not _in_critical(frame):
         # Second signal of the same kind: the safe point never came; stop now.
         _pending = None
         raise Interrupted(signum)
-    if _pending is None and not _worker:
-        _pending = signum
+    elif _pending is None and not _worker:
+        # A signal during the clean-up of the first (a live flight's ending): the next
+        # safe point, or the watchdog after its own grace, raises it.
+        _pending, _pending_at = signum, now
+    _schedule()
 
 
 def _alarm(signum: int, frame: FrameType | None) -> None:
@@ -230,7 +233,9 @@ def _alarm(signum: int, frame: FrameType | None) -> None:
     global _pending
     now = time.monotonic()
     due: BaseException | None = None
-    if _signal is not None and now >= _signal_at + GRACE_S and (_pending is not None or _user):
+    if _pending is not None and now >= _pending_at + GRACE_S:
+        due = Interrupted(_pending)
+    elif _signal is not None and _user and now >= _signal_at + GRACE_S:
         due = Interrupted(_signal)
     elif _user and _deadline is not None and _limit_s is not None and now >= _deadline:
         due = TimedOut(_limit_s)
@@ -316,9 +321,13 @@ def _schedule() -> None:
         return
     now = time.monotonic()
     wake: float | None = None
-    if _signal is not None and (_pending is not None or _user):
-        grace_ends = _signal_at + GRACE_S
-        wake = grace_ends if now < grace_ends else now + REPEAT_S
+    for since in (
+        _pending_at if _pending is not None else None,
+        _signal_at if _signal is not None and _user else None,
+    ):
+        if since is not None:
+            at = since + GRACE_S if now < since + GRACE_S else now + REPEAT_S
+            wake = at if wake is None else min(wake, at)
     if _user and _deadline is not None:
         at = _deadline if now < _deadline else now + REPEAT_S
         wake = at if wake is None else min(wake, at)

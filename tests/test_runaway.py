@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from aeroexec import interrupts
 from aeroexec.recording import open_recording
 
 REPO = Path(__file__).resolve().parents[1]
@@ -351,3 +352,54 @@ def test_os_exit_leaves_a_recording_info_calls_unfinished_and_recover_completes(
     assert whole.complete, whole.problem
     assert whole.survey().message_count == open_recording(out).survey().message_count > 0
     assert os.path.getsize(fixed) > 0
+
+
+# -- the watchdog never cuts a record in half -------------------------------------------------
+CRITICAL = """\
+import time
+
+def write_for(seconds, trace):
+    trace.append("entered")
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        pass
+    trace.append("left")
+"""
+
+
+def test_the_watchdog_waits_until_the_main_thread_leaves_a_critical_file(tmp_path: Path) -> None:
+    """As the recorder's module is: a signal due while the main thread is inside it is
+    raised only once it has left (in-process: the watchdog is this process's)."""
+    path = tmp_path / "critical_writer.py"
+    path.write_text(CRITICAL, encoding="utf-8")
+    namespace: dict[str, object] = {}
+    exec(compile(CRITICAL, str(path), "exec"), namespace)
+    write_for = namespace["write_for"]
+    assert callable(write_for)
+    trace: list[str] = []
+    interrupts.critical_file(str(path))
+    try:
+        with (
+            interrupts.signals_as_interrupts(),
+            pytest.raises(interrupts.Interrupted) as caught,
+            interrupts.user_code(forced_exit=False),
+        ):
+            os.kill(os.getpid(), signal.SIGTERM)
+            # Past the grace inside the critical file, then spinning outside it.
+            write_for(interrupts.GRACE_S + 0.4, trace)
+            left = time.monotonic()
+            trace.append("spinning")
+            while True:
+                pass
+    finally:
+        interrupts._critical_files.discard(str(path))
+    assert caught.value.signum == signal.SIGTERM
+    assert trace == ["entered", "left", "spinning"]
+    assert time.monotonic() - left < 0.5  # raised soon after it left
+    assert interrupts.pending() is None
+
+
+def test_recorder_writes_are_critical() -> None:
+    from aeroexec.recording import writer
+
+    assert writer.__file__ in interrupts._critical_files

@@ -153,11 +153,12 @@ def run(
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
     standard library.
 
-    Exit code 0 when the mission function returned with the vehicle healthy; 1 when it
-    raised, called sys.exit() with a non-zero code, ran past --max-sim-time or lost its
-    vehicle (a fault such as an empty battery); 2 when an input (mission, catalog, world,
-    configuration, behaviors) could not be used, a catalog behavior has no implementation,
-    or the recording could not be written; 128+N when stopped by signal N.
+    Exit code 0 when the mission function returned (or called sys.exit() or sys.exit(0))
+    with the vehicle healthy; 1 when it raised, called sys.exit() with another code, ran
+    past --max-sim-time or --timeout or lost its vehicle (a fault such as an empty
+    battery); 2 when an input (mission, catalog, world, configuration, behaviors) could not
+    be used, a catalog behavior has no implementation, or the recording could not be
+    written; 128+N when stopped by signal N (the first signal is enough).
     """
     apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
