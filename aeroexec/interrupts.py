@@ -39,6 +39,7 @@ import contextlib
 import os
 import signal
 import sys
+import sysconfig
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -169,7 +170,7 @@ def limit_user_code(seconds: float | None) -> None:
     """The wall-clock limit of each run of the user's code in this process (each
     mission run, each behaviors import); None: no limit."""
     global _default_limit_s
-    _default_limit_s = seconds if seconds else None
+    _default_limit_s = seconds if seconds and seconds != float("inf") else None
 
 
 def user_code_limit() -> float | None:
@@ -197,7 +198,8 @@ def user_code(
         _deadline, _limit_s = until
     _may_force = _may_force and forced_exit
     _user += 1
-    installed = _install_alarm()
+    # Outside a command (a library caller) the alarm serves only the time limit.
+    installed = until is not None and _install_alarm()
     _schedule()
     try:
         yield
@@ -287,32 +289,35 @@ def _force(due: BaseException, frame: FrameType | None) -> None:
     notes.append("the user's code kept running, so aeroexec exited without unwinding")
     with contextlib.suppress(BaseException):
         sys.stdout.flush()
-    with contextlib.suppress(OSError):
-        os.write(2, ("; ".join([head, *notes]) + "\n").encode("utf-8", "replace"))
+    if not _worker:  # a worker's parent says the one line
+        with contextlib.suppress(OSError):
+            os.write(2, ("; ".join([head, *notes]) + "\n").encode("utf-8", "replace"))
     os._exit(code)
 
 
 def user_place(frame: FrameType | None) -> str:
     """`file:line` of the innermost frame of the user's code (not aeroexec's, not
     Python's own library) on the stack of `frame`; '' when there is none."""
-    ours = str(Path(__file__).resolve().parent)
-    library = {os.path.dirname(os.__file__)}
+    ours = str(Path(__file__).resolve().parent) + os.sep
+    library = sysconfig.get_paths()["stdlib"] + os.sep
     while frame is not None:
         file = frame.f_code.co_filename
-        if not (
-            file.startswith("<")
-            or os.path.abspath(file).startswith(ours)
-            or os.path.dirname(os.path.abspath(file)) in library
-        ):
+        path = os.path.abspath(file)
+        python_own = path.startswith(library) and "site-packages" not in path
+        if not (file.startswith("<") or path.startswith(ours) or python_own):
             return f"{file}:{frame.f_lineno}"
         frame = frame.f_back
     return ""
 
 
 # -- the timer ------------------------------------------------------------------------------
+#: The longest the timer is set for (a huge --timeout wakes it up to look again).
+_LONGEST_S = 86400.0
+
+
 def _arm(delay: float) -> None:
     if _alarm_installed:
-        signal.setitimer(signal.ITIMER_REAL, max(delay, 0.001))
+        signal.setitimer(signal.ITIMER_REAL, min(max(delay, 0.001), _LONGEST_S))
 
 
 def _schedule() -> None:
