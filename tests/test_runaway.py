@@ -404,3 +404,42 @@ def test_recorder_writes_are_critical() -> None:
     from aeroexec.recording import writer
 
     assert writer.__file__ in interrupts._critical_files
+
+
+# -- a behavior that never returns, during the session ----------------------------------------
+RUNAWAY_BEHAVIOR = """\
+import pathlib, time
+from aeroexec.executive import Behavior
+
+class StuckWait(Behavior):
+    name = "WAIT"
+    argument_names = ("DURATION",)
+
+    def on_run(self):
+        pathlib.Path({marker!r}).write_text("stuck")
+        while True:
+            try:
+                time.sleep(1000)
+            except BaseException:
+                pass
+"""
+
+
+def test_a_behavior_stuck_in_its_own_loop_stops_at_one_signal(tmp_path: Path) -> None:
+    marker = tmp_path / "busy.marker"
+    module = tmp_path / "stuck.py"
+    module.write_text(RUNAWAY_BEHAVIOR.format(marker=str(marker)), encoding="utf-8")
+    mission = tmp_path / "waits.py"
+    mission.write_text(
+        "import executive_engine_api as api\n\ndef runMission():\n"
+        '    api.executeBehavior("TAKE_OFF")\n    api.executeBehavior("WAIT", duration=1)\n',
+        encoding="utf-8",
+    )
+    out = tmp_path / "flight.mcap"
+    process = start("run", str(mission), "-b", str(module), "-q", "-o", str(out), cwd=tmp_path)
+    busy(process, marker)
+    took, err = stop_once(process, signal.SIGHUP)
+    assert process.returncode == 128 + signal.SIGHUP, err
+    assert one_line(err).startswith("aeroexec run: interrupted by SIGHUP; recording finalized")
+    assert took <= BOUND_S, f"{took:.2f} s"
+    finished(out, "interrupted", "SIGHUP")
