@@ -53,7 +53,7 @@ GRACE_S = 0.5
 #: How often it is raised again while the user's code keeps catching it.
 REPEAT_S = 0.05
 #: When the user's code still holds on this long after the signal: the forced exit.
-FORCE_AFTER_S = 1.2
+FORCE_AFTER_S = 1.0
 #: A watchdog that finds the main thread inside a critical file tries again this soon.
 RETRY_S = 0.005
 
