@@ -213,6 +213,25 @@ def test_the_rtl_failsafe_flies_home_and_lands(tmp_path: Path) -> None:
 # -- signals ------------------------------------------------------------------------------------
 
 
+def test_a_mission_spinning_in_the_air_is_stopped_by_timeout_and_landed(tmp_path: Path) -> None:
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path, "    api.executeBehavior('TAKE_OFF')\n    while True:\n        pass\n"
+    )
+    with mavsim_thread(f"udpout:127.0.0.1:{port}") as sim:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--timeout", "1"]
+        )
+        final = sim.stats()["final"]
+    assert result.exit_code == 1, result.output
+    assert "ending: switched to LAND" in result.output
+    last = result.output.strip().splitlines()[-1]
+    assert last.endswith(
+        "mission.py:6: mission stopped: still running after 1 s of wall-clock time (--timeout)"
+    )
+    assert final["mode"] == "LAND" and not final["armed"]
+
+
 def test_sigterm_mid_flight_lands_finalizes_the_recording_and_exits_143(tmp_path: Path) -> None:
     port = free_udp_port()
     record = tmp_path / "flight.mcap"

@@ -8,6 +8,7 @@ Each test runs `aeroexec view` as a subprocess and finds the viewer as its child
 
 from __future__ import annotations
 
+import os
 import signal
 import socket
 import subprocess
@@ -84,12 +85,14 @@ def _listening(pid: int) -> set[tuple[str, int]]:
 
 
 class View:
-    def __init__(self, flight: Path, *args: str) -> None:
+    def __init__(self, flight: Path, *args: str, session: bool = False) -> None:
+        # session: a process group of its own, to send it a terminal's Ctrl-C (killpg).
         self.popen = subprocess.Popen(
             [sys.executable, "-m", "aeroexec", "view", str(flight), *args],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
+            start_new_session=session,
         )
 
     def wait_serving(self, timeout: float = 60.0) -> str:
@@ -163,3 +166,19 @@ def test_the_viewer_ends_when_aeroexec_is_killed(
     view.popen.kill()  # SIGKILL: aeroexec cannot stop it; the kernel does
     view.popen.wait(10)
     assert _wait_gone(viewer), "the web viewer outlived aeroexec"
+
+
+def test_ctrl_c_to_the_process_group_is_exit_130_and_one_line(
+    flight: Path, tmp_path: Path, views: list[View]
+) -> None:
+    """A terminal's Ctrl-C reaches aeroexec and the viewer at once: the viewer may end
+    first (exit status -2), and that is still a stop by SIGINT, not a failed viewer."""
+    view = View(flight, "--web", "--port", "0", "--output", str(tmp_path / "f.rrd"), session=True)
+    views.append(view)
+    view.wait_serving()
+    viewer = view.viewer()
+    os.killpg(view.popen.pid, signal.SIGINT)
+    assert view.popen.wait(20) == 128 + signal.SIGINT
+    assert view.popen.stderr is not None
+    assert view.popen.stderr.read() == "aeroexec view: interrupted by SIGINT; web viewer stopped\n"
+    assert _wait_gone(viewer)

@@ -24,7 +24,7 @@ from aeroexec import __version__
 from aeroexec.cli.command import Group, Typer, running
 from aeroexec.cli.commands import COMMANDS
 from aeroexec.errors import AeroexecError, OutputLost
-from aeroexec.interrupts import Interrupted, signals_as_interrupts
+from aeroexec.interrupts import Interrupted, TimedOut, signals_as_interrupts, user_place
 from aeroexec.interrupts import check as check_interrupts
 
 
@@ -182,7 +182,7 @@ def guarded(func: F) -> F:
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
-            with signals_as_interrupts():
+            with signals_as_interrupts(who=running()):
                 result = func(*args, **kwargs)
                 # A signal that came after the last safe point still stops with 128+N
                 # (the command's outputs are complete by now).
@@ -198,9 +198,29 @@ def guarded(func: F) -> F:
                 text = f"{running()}: error: {text}"
             error_line(text)
             raise typer.Exit(2) from None
+        except TimedOut as exc:
+            # What a command did not turn into a mission's failure: still one line.
+            error_line(f"{running()}: error: {exc}")
+            raise typer.Exit(1) from None
+        except SystemExit as exc:
+            # The user's code called sys.exit() where no command expected it: aeroexec
+            # decides its own exit code (0, 1, 2 or 128+N), so this is an error.
+            where = _exit_place(exc)
+            error_line(
+                f"{where or running()}: error: the user's code called sys.exit({exc.code!r})"
+            )
+            raise typer.Exit(2) from None
         except BrokenPipeError:
             # `aeroexec ... | head` closed the pipe: not an error worth a traceback.
             sys.stderr.close()
             raise typer.Exit(0) from None
 
     return wrapper  # type: ignore[return-value]
+
+
+def _exit_place(exc: BaseException) -> str:
+    """`file:line` of the innermost user frame `exc` passed through ('' if none)."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return user_place(tb.tb_frame) if tb is not None else ""

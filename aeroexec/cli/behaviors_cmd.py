@@ -13,7 +13,15 @@ import typer
 from aeroexec.catalog import load_catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, guarded
-from aeroexec.cli.options import Color, catalog_option, color_option, format_option, use_color
+from aeroexec.cli.options import (
+    Color,
+    apply_timeout,
+    catalog_option,
+    color_option,
+    format_option,
+    timeout_option,
+    use_color,
+)
 from aeroexec.cli.project import BehaviorsOption, catalog_path, project, project_behaviors
 from aeroexec.cli.tables import print_table
 from aeroexec.plugins import Implementation
@@ -56,6 +64,10 @@ def behaviors_command(
         "Catalog to check (default: the project's, else the bundled default)."
     ),
     behaviors: BehaviorsOption = None,
+    timeout: float | None = timeout_option(
+        "Stop importing -b/--behaviors (and the project's) when it has run this long in "
+        "wall-clock time: an error at its file:line, exit 2. Default: no limit."
+    ),
     output_format: OutputFormat = format_option(
         OutputFormat, "text (a table) or json (every field, for machines)."
     ),
@@ -73,6 +85,7 @@ def behaviors_command(
     Exit codes: 0 every catalog behavior has an implementation; 1 some have none;
     2 the catalog, the configuration or a behavior module could not be used.
     """
+    apply_timeout(timeout)
     settings = project()
     found = project_behaviors(behaviors, settings)
     chosen = catalog_path(catalog, settings, DEFAULT_CATALOG)

@@ -13,6 +13,7 @@ from aeroexec.cli.command import running
 from aeroexec.cli.options import (
     Color,
     allow_remote_option,
+    apply_timeout,
     catalog_option,
     choices,
     color_option,
@@ -22,6 +23,7 @@ from aeroexec.cli.options import (
     output_option,
     quiet_option,
     replaced,
+    timeout_option,
     use_color,
 )
 from aeroexec.cli.project import (
@@ -137,6 +139,11 @@ def fly_command(
         show_default=True,
     ),
     behaviors: BehaviorsOption = None,
+    timeout: float | None = timeout_option(
+        "Stop the mission when it has run this long in wall-clock time (for one that "
+        "stops yielding: a loop, a sleep): it fails at its file:line, exit 1; also limits "
+        "importing -b/--behaviors (exit 2). Default: no limit; 0: none."
+    ),
     allow_unimplemented: AllowUnimplementedOption = False,
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
@@ -161,6 +168,7 @@ def fly_command(
     not be read or the autopilot never answered; 128+N when stopped by signal N (after
     the ending).
     """
+    apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
     settings = project()
     config = FlightConfig(

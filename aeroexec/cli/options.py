@@ -18,6 +18,7 @@ import typer
 
 from aeroexec.cli.app import say
 from aeroexec.errors import AeroexecError
+from aeroexec.interrupts import limit_user_code
 
 E = TypeVar("E", bound=Enum)
 T = TypeVar("T")
@@ -140,6 +141,22 @@ def seed_option() -> Any:
         help="Seed of the simulator's random failures (default: the project's, else 0).",
         show_default=False,
     )
+
+
+def timeout_option(help: str) -> Any:
+    """`--timeout SECONDS`: the wall-clock limit of the user's code (no default: a real
+    flight or a corpus replay has no natural bound, and a signal now always ends a run;
+    `--max-sim-time` already ends a mission that keeps the simulated clock going). No
+    `min=`: that would make typer read it with pydantic, a third of `verify`'s start-up;
+    `apply_timeout` checks it."""
+    return typer.Option(None, "--timeout", metavar="SECONDS", help=help, show_default=False)
+
+
+def apply_timeout(seconds: float | None) -> None:
+    """The limit `--timeout` sets on each run of the user's code in this command."""
+    if seconds is not None and not seconds >= 0:  # (NaN too)
+        raise AeroexecError(f"invalid value for --timeout: {seconds:g}: give 0 or more seconds")
+    limit_user_code(seconds)
 
 
 def jobs_option(help: str) -> Any:

@@ -15,6 +15,7 @@ import typer
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.options import (
+    apply_timeout,
     catalog_option,
     choices,
     deprecated_option,
@@ -24,6 +25,7 @@ from aeroexec.cli.options import (
     output_dir_option,
     output_option,
     replaced,
+    timeout_option,
 )
 from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
 from aeroexec.errors import AeroexecError, Mark, RecordingError
@@ -167,6 +169,11 @@ def replay(
         "one per CPU; --executor local)."
     ),
     behaviors: BehaviorsOption = None,
+    timeout: float | None = timeout_option(
+        "Closed loop: stop the mission when it has run this long in wall-clock time (for "
+        "one that stops yielding: a loop, a sleep): it fails at its file:line, exit 1; "
+        "also limits importing -b/--behaviors (exit 2). Default: no limit; 0: none."
+    ),
     shard: Annotated[
         str | None,
         typer.Option(
@@ -231,6 +238,7 @@ def replay(
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs; 2 an input could not be read (one line on stderr each).
     """
+    apply_timeout(timeout)
     out_dir = replaced(output_dir, out_dir, new_name="--output-dir", old_name="--out-dir")
     # A JUnit report says when the run started (and checks SOURCE_DATE_EPOCH up front).
     timing = start_timing() if output_format is OutputFormat.junit else None

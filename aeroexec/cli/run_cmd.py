@@ -13,6 +13,7 @@ from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.options import (
     Color,
+    apply_timeout,
     catalog_option,
     color_option,
     debug_option,
@@ -21,6 +22,7 @@ from aeroexec.cli.options import (
     quiet_option,
     replaced,
     seed_option,
+    timeout_option,
     use_color,
     world_option,
 )
@@ -122,6 +124,11 @@ def run(
     output: Path | None = output_option("Record the session to this MCAP file."),
     record: Path | None = deprecated_option("--record", "-r", instead="-o/--output"),
     behaviors: BehaviorsOption = None,
+    timeout: float | None = timeout_option(
+        "Stop the mission when it has run this long in wall-clock time (for one that "
+        "stops yielding: a loop, a sleep): it fails at its file:line, exit 1; also limits "
+        "importing -b/--behaviors (exit 2). Default: no limit; 0: none."
+    ),
     allow_unimplemented: AllowUnimplementedOption = False,
     max_sim_time: float = typer.Option(
         DEFAULT_MAX_SIM_TIME_S,
@@ -146,12 +153,14 @@ def run(
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
     standard library.
 
-    Exit code 0 when the mission function returned with the vehicle healthy; 1 when it
-    raised, called sys.exit() with a non-zero code, ran past --max-sim-time or lost its
-    vehicle (a fault such as an empty battery); 2 when an input (mission, catalog, world,
-    configuration, behaviors) could not be used, a catalog behavior has no implementation,
-    or the recording could not be written; 128+N when stopped by signal N.
+    Exit code 0 when the mission function returned (or called sys.exit() or sys.exit(0))
+    with the vehicle healthy; 1 when it raised, called sys.exit() with another code, ran
+    past --max-sim-time or --timeout or lost its vehicle (a fault such as an empty
+    battery); 2 when an input (mission, catalog, world, configuration, behaviors) could not
+    be used, a catalog behavior has no implementation, or the recording could not be
+    written; 128+N when stopped by signal N (the first signal is enough).
     """
+    apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
     settings = project()
     config = SessionConfig(
@@ -190,6 +199,8 @@ def report_outcome(result: SessionResult, debug: bool, vehicle: bool) -> bool:
         where = f"{outcome.where}: " if outcome.where else ""
         if outcome.ending is Ending.TIME_LIMIT:
             error_line(f"{where}mission stopped: {outcome.error} (--max-sim-time)")
+        elif outcome.ending is Ending.TIMEOUT:
+            error_line(f"{where}mission stopped: {outcome.error}")
         else:
             error_line(f"{where}mission failed: {outcome.error}")
         return False

@@ -11,10 +11,12 @@ from aeroexec.catalog.model import Severity
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.options import (
     Color,
+    apply_timeout,
     choices,
     color_option,
     format_option,
     mission_option,
+    timeout_option,
     use_color,
     world_option,
 )
@@ -123,6 +125,10 @@ def verify_command(
     ),
     color: Color = color_option(),
     behaviors: BehaviorsOption = None,
+    timeout: float | None = timeout_option(
+        "Stop importing -b/--behaviors (and the project's) when it has run this long in "
+        "wall-clock time: an error at its file:line, exit 2. Default: no limit."
+    ),
 ) -> None:
     if explain is not None:
         rule = get(explain)
@@ -138,6 +144,7 @@ def verify_command(
         threshold = Severity.INFO if fmt in ("json", "sarif") else Severity.WARNING
     else:
         threshold = Severity(min_severity.value)
+    apply_timeout(timeout)
     settings = project()
     if not catalogs and settings.catalog is not None:
         catalogs = [str(settings.catalog)]

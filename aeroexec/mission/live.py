@@ -214,7 +214,9 @@ def fly(
         api = MissionAPI(executive)
         outcome = MissionOutcome(False, None, "the mission did not end")
         try:
-            outcome = run_script(script, api)
+            # A mission that never lets go of a signal is not ended by exiting: the
+            # vehicle must get its ending (it is raised again at every safe point).
+            outcome = run_script(script, api, forced_exit=False)
             how = "returned" if outcome.returned else "raised"
         except LinkTimeout as exc:
             outcome = MissionOutcome(

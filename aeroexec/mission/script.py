@@ -22,6 +22,7 @@ from typing import Any
 from aeroexec.errors import AeroexecError, Mark, MissionError, one_line
 from aeroexec.executive.executive import TimeLimitReached
 from aeroexec.inputs import read_text
+from aeroexec.interrupts import TimedOut, deadline, user_code
 from aeroexec.interrupts import handling as handling_signals
 from aeroexec.mission.api import MODULE_NAME, MissionAPI
 
@@ -45,6 +46,7 @@ class Ending(str, Enum):
     RAISED = "raised"
     EXITED = "exited"  # the mission called sys.exit()
     TIME_LIMIT = "max_sim_time"
+    TIMEOUT = "timeout"  # ran past its wall-clock limit (--timeout)
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,18 +85,29 @@ def compile_mission(text: str, file: str = "<mission>") -> MissionScript:
     return MissionScript(file, text, code)
 
 
-def run_script(script: MissionScript, api: MissionAPI) -> MissionOutcome:
+def run_script(
+    script: MissionScript,
+    api: MissionAPI,
+    time_limit_s: float | None = None,
+    *,
+    forced_exit: bool = True,
+) -> MissionOutcome:
     """Execute the script's top level, then its entry point, with the API importable.
 
     Exceptions raised by the mission are the mission's failure (an outcome), not ours;
-    a script without an entry point is unusable input (`MissionError`).
+    a script without an entry point is unusable input (`MissionError`). The mission runs
+    as the user's code (`interrupts.user_code`): a signal stops it wherever it is, and so
+    does its wall-clock limit (`time_limit_s`, default `--timeout`'s), an outcome
+    (`Ending.TIMEOUT`). `forced_exit=False`: a mission that never lets go of a signal is
+    not ended by exiting the process (a live flight must get its ending).
     """
+    until = deadline(time_limit_s)
     namespace: dict[str, Any] = {"__name__": "__aeroexec_mission__", "__file__": script.path}
     previous = sys.modules.get(MODULE_NAME)
     sys.modules[MODULE_NAME] = api.as_module()
     try:
         with _importable(script.directory):
-            ended = _run(lambda: exec(script.code, namespace), script)
+            ended = _run(lambda: exec(script.code, namespace), script, until, forced_exit)
             if ended is not None:
                 return ended
             entry = next((namespace[n] for n in ENTRY_POINTS if callable(namespace.get(n))), None)
@@ -104,7 +117,7 @@ def run_script(script: MissionScript, api: MissionAPI) -> MissionOutcome:
                     Mark(script.path),
                 )
             result: list[Any] = []
-            ended = _run(lambda: result.append(entry()), script)
+            ended = _run(lambda: result.append(entry()), script, until, forced_exit)
             return ended if ended is not None else MissionOutcome(True, result[0])
     finally:
         if previous is None:
@@ -134,7 +147,12 @@ def _importable(directory: str | None) -> Iterator[None]:
                 del sys.modules[name]
 
 
-def _run(step: Callable[[], object], script: MissionScript) -> MissionOutcome | None:
+def _run(
+    step: Callable[[], object],
+    script: MissionScript,
+    until: tuple[float, float] | None = None,
+    forced_exit: bool = True,
+) -> MissionOutcome | None:
     """Run one part of the mission; None if it went through, else how the mission ended.
 
     Whatever the mission raises or calls is the mission's ending, not aeroexec's:
@@ -143,12 +161,18 @@ def _run(step: Callable[[], object], script: MissionScript) -> MissionOutcome | 
     while signals are handled (`aeroexec.interrupts`) it arrives as `Interrupted`,
     which passes through like the executive's `TimeLimitReached` and aeroexec's own
     input/output errors (the recorder's, say) other than `MissionError`.
+    `sys.exit()` and `sys.exit(0)` end the mission as if it had returned.
     """
     try:
-        step()
+        with user_code(until, forced_exit=forced_exit):
+            step()
     except TimeLimitReached as exc:
         return MissionOutcome(
             False, None, str(exc), traceback.format_exc(), Ending.TIME_LIMIT, _where(exc, script)
+        )
+    except TimedOut as exc:
+        return MissionOutcome(
+            False, None, str(exc), traceback.format_exc(), Ending.TIMEOUT, _where(exc, script)
         )
     except SystemExit as exc:
         where = _where(exc, script)

@@ -254,7 +254,7 @@ def recording_session(recorder: Recorder | None, vehicle: Vehicle | None = None)
 
 def finalized_note(recorder: Recorder) -> str:
     """What an interrupted command says about its recording."""
-    return f"recording finalized: {recorder.path} ({recorder.messages_written} messages, complete)"
+    return recorder.finalized_note()
 
 
 def end_recording(recorder: Recorder, reason: str, detail: str, fault: str) -> None:

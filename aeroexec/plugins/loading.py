@@ -31,6 +31,7 @@ from types import ModuleType, TracebackType
 
 from aeroexec.display import shown
 from aeroexec.errors import BehaviorError, Mark
+from aeroexec.interrupts import TimedOut, deadline, user_code
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,9 +92,22 @@ class Importer:
 
 
 def import_module(dotted: str, named: Named, looked_in: Path | None) -> ModuleType:
-    """`importlib.import_module`, with every failure a `BehaviorError` at its place."""
+    """`importlib.import_module`, with every failure a `BehaviorError` at its place.
+
+    Importing runs the module's top level, the user's code: a signal stops it wherever
+    it is, and so does `--timeout` (`interrupts.user_code`). A module that calls
+    `sys.exit()` fails to import; it does not end aeroexec."""
     try:
-        return importlib.import_module(dotted)
+        with user_code(deadline()):
+            return importlib.import_module(dotted)
+    except TimedOut as exc:
+        raise failure_in_user_code(
+            exc, f"importing {named.label} failed", named.at, described=str(exc)
+        ) from None
+    except SystemExit as exc:
+        raise failure_in_user_code(
+            exc, f"importing {named.label} failed", named.at, described=f"sys.exit({exc.code!r})"
+        ) from None
     except SyntaxError as exc:
         raise _syntax_error(exc, named) from None
     except ModuleNotFoundError as exc:
@@ -177,13 +191,16 @@ def _is_ours(filename: str) -> bool:
     return filename.startswith(package) or "importlib" in Path(filename).parts
 
 
-def failure_in_user_code(exc: BaseException, what: str, fallback: Mark | None) -> BehaviorError:
-    """`what`: TypeName: message, at the deepest frame of the developer's own code."""
+def failure_in_user_code(
+    exc: BaseException, what: str, fallback: Mark | None, described: str = ""
+) -> BehaviorError:
+    """`what`: TypeName: message (or `described`), at the deepest frame of the
+    developer's own code."""
     mark = fallback
     for frame in _frames(exc.__traceback__):
         if not _is_ours(frame.filename):
             mark = Mark(shown(frame.filename), frame.lineno or 0, 1 if frame.lineno else 0)
-    return BehaviorError(f"{what}: {type(exc).__name__}: {exc}", mark)
+    return BehaviorError(f"{what}: {described or f'{type(exc).__name__}: {exc}'}", mark)
 
 
 def class_mark(cls: type) -> Mark:

@@ -52,7 +52,7 @@ import orjson
 from mcap.writer import CompressionType, Writer
 from mcap.writer import __version__ as MCAP_VERSION
 
-from aeroexec import __version__
+from aeroexec import __version__, interrupts
 from aeroexec.errors import Mark, OutputLost, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.recording.foxglove import (
@@ -76,6 +76,10 @@ from aeroexec.recording.schemas import (
 
 if TYPE_CHECKING:
     from aeroexec.vehicles.world import World
+
+# A signal's watchdog never raises inside this module (or the mcap writer it calls):
+# a record is written whole or not at all.
+interrupts.critical_file(__file__)
 
 #: Flush bound, in messages (see the module docstring).
 FLUSH_MESSAGES = 100
@@ -295,6 +299,7 @@ class Recorder:
         self._pending_since = 0
         self._flushed = 0
         self._closed = False
+        self._forget_finisher: Callable[[], None] = lambda: None
         try:
             self._guard(
                 self._start, dict(metadata or {}), dict(attachments or {}), dict(records or {})
@@ -306,6 +311,7 @@ class Recorder:
             self._stream.close()
             raise
         atexit.register(self.close)
+        self._forget_finisher = interrupts.at_forced_exit(self._finish_abruptly)
 
     # -- BusObserver ---------------------------------------------------------------------
     def on_service_call(self, record: ServiceCallRecord) -> None:
@@ -384,8 +390,23 @@ class Recorder:
         self._guard(self._finish)
         self._closed = True
         atexit.unregister(self.close)
+        self._forget_finisher()
         self._stream.close()
         self._flushed = self._count
+
+    def finalized_note(self) -> str:
+        """What a stopped command says about this (closed) recording."""
+        return f"recording finalized: {self.path} ({self.messages_written} messages, complete)"
+
+    def _finish_abruptly(self, reason: str, detail: str) -> str | None:
+        """Before a forced exit (the user's code never let go of a signal): the end
+        record and the footer, written from the signal handler — never while a record is
+        being written (the handler waits until this module is left)."""
+        if self._closed:
+            return None
+        self.end_session(reason, detail)
+        self.close()
+        return self.finalized_note()
 
     def __enter__(self) -> Recorder:
         return self
@@ -513,6 +534,7 @@ class Recorder:
         if not self._closed:
             self._closed = True
             atexit.unregister(self.close)
+            self._forget_finisher()
         with contextlib.suppress(OSError):  # flushing the buffer fails again: drop it
             self._stream.close()
         kept = self._salvage()

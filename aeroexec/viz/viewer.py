@@ -169,9 +169,16 @@ def serve_web(
         while True:
             interrupts.check()
             try:
-                return process.wait(_POLL_S)
+                status = process.wait(_POLL_S)
             except subprocess.TimeoutExpired:
                 continue
+            if -status in interrupts.HANDLED:
+                # Ctrl-C reaches the whole process group: the viewer may be gone before
+                # our own handler has noted the signal. Either way, it is a stop by
+                # signal N (128+N), not a viewer that failed.
+                interrupts.check()
+                raise interrupts.Interrupted(-status)
+            return status
     except interrupts.Interrupted as exc:
         exc.notes.append("web viewer stopped")
         raise
