@@ -6,8 +6,9 @@ when it gives a vehicle state, the latest velocity/battery/status before it), to
 the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed
 `mission/command` and coordinator calls (`reconstruct.py`),
 `list_of_active_capabilities`, `beliefs`, `process_state`, `vehicle/state` (+
-`vehicle/transform` when the pose changed, and the `scene` with the vehicle's body at
-the first state), `call_log` for the reconstructed calls. Log times are the bag's.
+`vehicle/transform` when the pose changed), the `scene` with the vehicle's body at the
+bag's first message (a bag has no world; its first transform comes with its first
+pose), `call_log` for the reconstructed calls. Log times are the bag's.
 Messages are written in bag time order: reconstruction decides an input only when the 2
 x grace after it has been read, so the messages from its horizon on wait (about a second
 of bag time) until it has: the bag's own in a queue (they come in time order), the
@@ -45,7 +46,7 @@ from aeroexec.bags.types import Decoder, TypeResolver
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.outputs import whole_file_or_none
 from aeroexec.progress import Advance, ProgressFactory
-from aeroexec.recording.foxglove import first_scene, vehicle_frame
+from aeroexec.recording.foxglove import SCENE_TOPIC, moving_entities, scene_update, vehicle_frame
 from aeroexec.recording.writer import METADATA_NAME
 
 #: The import's metadata: what replay and info read (clock and vehicle kinds).
@@ -266,6 +267,9 @@ class _Import:
         count = 0
         for connection, time_ns, data in self.bag.messages():
             count += 1
+            if count == 1:  # the 3D panel's scene from the start (nothing is held yet)
+                scene = scene_update(moving_entities(time_ns, self.drone, None))
+                sink.derived_message(SCENE_TOPIC, time_ns, scene)
             if advance is not None and count % PROGRESS_EVERY == 0:
                 advance(PROGRESS_EVERY)
             if reconstructing:
@@ -301,7 +305,6 @@ class _Import:
             )
 
     def _state(self, pose: extract.Pose, time_ns: int) -> None:
-        first = self._last_state_ns is None
         self._last_state_ns = time_ns
         self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
         # As the Recorder does: Foxglove holds the latest transform, so a vehicle that
@@ -312,8 +315,6 @@ class _Import:
             frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
             if frame is not None:
                 self._derive("vehicle/transform", time_ns, frame)
-        if first:  # a bag has no world: the scene is the vehicle's body
-            self._derive("scene", time_ns, first_scene(time_ns, self.drone, None))
 
     def _derive(self, topic: str, time_ns: int, data: dict[str, Any]) -> None:
         if not self.reconstructing:

@@ -248,6 +248,7 @@ TOPIC_SCHEMAS: dict[str, str] = {
     "vehicle/state": VEHICLE_STATE,
     "vehicle/transform": FOXGLOVE_FRAME_TRANSFORM,
     "scene": FOXGLOVE_SCENE_UPDATE,
+    "scene/static": FOXGLOVE_SCENE_UPDATE,
     "log": FOXGLOVE_LOG,
     "call_log": FOXGLOVE_LOG,
 }
