@@ -15,6 +15,11 @@ recorder writes them, and a live publisher can send the very same ones.
     first log time, then each time the object has moved `OBJECT_STEP_M`.
 * `call_log` (`foxglove.Log`): one line per service call made at the top (by the mission,
   the executive or a behavior; the calls nested inside it are in their own channels).
+* `capability_state` (`aeroexec.CapabilityState`): `{name, references}` for each
+  capability whose reference count changed, 0 when released: one series per capability
+  for a State Transitions panel (`capability_state{name=="X"}.references`). The list of
+  active capabilities cannot give it: a released capability is absent from the list, and
+  the panel skips a message whose path yields nothing, so it would stay drawn as held.
 
 Every message is complete (all the fields Foxglove's schema requires, primitive lists
 empty when unused) and a pure function of its inputs, so recordings stay byte-identical.
@@ -37,6 +42,7 @@ TRANSFORM_TOPIC = "vehicle/transform"
 SCENE_TOPIC = "scene"
 STATIC_SCENE_TOPIC = "scene/static"
 CALL_LOG_TOPIC = "call_log"
+CAPABILITY_TOPIC = "capability_state"
 #: A moving object's entity is sent again each time the object has moved this far (m):
 #: half its size, a step the eye follows, at a cost that grows with its speed only.
 OBJECT_STEP_M = 0.2
@@ -246,6 +252,28 @@ def object_period_ns(world: World | None) -> int | None:
     return max(1, round(OBJECT_STEP_M / speed * _NS))
 
 
+class CapabilityChanges:
+    """Each capability's reference count when it changes, from the successive
+    `list_of_active_capabilities` payloads (in list order, then the released ones)."""
+
+    __slots__ = ("_counts",)
+
+    def __init__(self) -> None:
+        self._counts: dict[str, int] = {}
+
+    def update(self, payload: Mapping[str, Any]) -> list[dict[str, Any]]:
+        now: dict[str, int] = {}
+        for item in payload.get("capabilities") or ():
+            if isinstance(item, Mapping) and isinstance(item.get("name"), str):
+                references = item.get("references", 1)
+                now[item["name"]] = references if isinstance(references, int) else 1
+        last = self._counts
+        changes = [{"name": n, "references": c} for n, c in now.items() if last.get(n) != c]
+        changes += [{"name": n, "references": 0} for n in last if n not in now]
+        self._counts = now
+        return changes
+
+
 #: Where a derived message goes: (topic inside the namespace, log time, payload).
 Emit = Callable[[str, int, dict[str, Any]], None]
 #: A vehicle pose: x, y, z (m, ENU) and yaw (rad, counter-clockwise from east).
@@ -263,6 +291,7 @@ class PanelFeed:
 
     __slots__ = (
         "_begun",
+        "_capabilities",
         "_drone",
         "_due",
         "_emit",
@@ -288,6 +317,7 @@ class PanelFeed:
         #: While an object moves: how often the scene is sent again, and when next.
         self._period = object_period_ns(world)
         self._due: int | None = None
+        self._capabilities = CapabilityChanges()
 
     @property
     def begun(self) -> bool:
@@ -329,6 +359,11 @@ class PanelFeed:
     def call(self, call: Mapping[str, Any], log_time_ns: int) -> None:
         """A completed service call made at the top: its line in the call log."""
         self._emit(CALL_LOG_TOPIC, log_time_ns, call_log_message(call, log_time_ns))
+
+    def capabilities(self, payload: Mapping[str, Any], log_time_ns: int) -> None:
+        """A `list_of_active_capabilities`: a message per capability whose count changed."""
+        for change in self._capabilities.update(payload):
+            self._emit(CAPABILITY_TOPIC, log_time_ns, change)
 
     def _scene(self, log_time_ns: int) -> None:
         self._emit(

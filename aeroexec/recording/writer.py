@@ -14,7 +14,8 @@ process_state, beliefs, mission/command, vehicle/state, log as `foxglove.Log`) p
 Foxglove's panels need (foxglove.py `PanelFeed`): `vehicle/transform`
 (`foxglove.FrameTransform`, with each vehicle/state whose pose changed), `scene/static` and
 `scene` (`foxglove.SceneUpdate`: the world's still entities; the vehicle's body and the
-moving object) and `call_log` (`foxglove.Log`, one line per top-level call). Given the
+moving object), `call_log` (`foxglove.Log`, one line per top-level call) and
+`capability_state` (each capability's reference count when it changes). Given the
 vehicle's `start_pose`, the scene and the first transform are written at the session's
 first log time, before its first message.
 Channels are created when first used, so their ids follow first-use order. Log time and
@@ -331,6 +332,8 @@ class Recorder:
         self._write(channel, log_time_ns, encode_json(data))
         if topic == "vehicle/state":
             self._panels.vehicle_state(data, log_time_ns)
+        elif topic == "list_of_active_capabilities":
+            self._panels.capabilities(data, log_time_ns)
 
     @property
     def messages_written(self) -> int:
