@@ -78,9 +78,10 @@ def layout(
     an import has no session log (an import may have its bag's rosout, and no calls):
     `--for REC` writes the layout for what REC holds, leaving out what it lacks.
 
-    Import it: in Lichtblick, the Layouts tab in the left sidebar, then "Import from
-    file..."; in Foxglove, the Layouts tab in the left sidebar (or the layout menu in the
-    top bar), then "Import from file...". Then pick the file.
+    Import it from the viewer's layout browser, "Import from file...", and pick the
+    file: in Lichtblick the Layouts tab of the left sidebar (its app menu's "Import
+    layout from file..." does nothing in the web app); in Foxglove the layout menu of
+    the top bar (older versions: the Layouts tab).
 
     \b
     Examples:

@@ -1,6 +1,6 @@
 """A Foxglove (and Lichtblick) layout for aeroexec recordings, imported once by the user
-(Foxglove: Layouts tab or layout menu -> "Import from file..."; Lichtblick: the Layouts
-tab in the left sidebar -> "Import from file..."): `aeroexec layout --foxglove -o FILE`.
+from the viewer's layout browser, "Import from file..." (Lichtblick: the Layouts tab of
+the left sidebar; Foxglove: the top bar's layout menu): `aeroexec layout --foxglove`.
 
     +----------------------------------+------------------------------------+
     | Flight (3D: world frame, vehicle | Position (m) and battery (plot of  |
