@@ -506,3 +506,27 @@ def test_unwritable_path_is_a_recording_error(tmp_path: Path) -> None:
     assert str(info.value).startswith(str(blocker / "x.mcap") + ": error: ")
     with pytest.raises(RecordingError, match="error: cannot write"):
         Recorder(tmp_path)
+
+
+def test_capability_state_has_each_change_and_the_release(tmp_path: Path) -> None:
+    # One series per capability for a State Transitions panel: a release must be a
+    # message of its own (0), not an absence from the list.
+    path = tmp_path / "capabilities.mcap"
+    lists = [
+        [("A", 1)],
+        [("A", 1), ("B", 1)],
+        [("A", 2), ("B", 1)],
+        [("A", 2), ("B", 1)],  # no change: no message
+        [("B", 1)],
+        [],
+    ]
+    with Recorder(path) as recorder:
+        for tick, names in enumerate(lists):
+            data = {"capabilities": [{"name": n, "references": r} for n, r in names]}
+            recorder.on_topic(TopicRecord("list_of_active_capabilities", data, tick))
+    changes = [
+        (m.log_time, d["name"], d["references"])
+        for _, c, m, d in _decoded(path)
+        if c.topic == "/drone1/capability_state"
+    ]
+    assert changes == [(0, "A", 1), (1, "B", 1), (2, "A", 2), (4, "A", 0), (5, "B", 0)]

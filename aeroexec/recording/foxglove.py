@@ -319,10 +319,6 @@ class PanelFeed:
         self._due: int | None = None
         self._capabilities = CapabilityChanges()
 
-    @property
-    def begun(self) -> bool:
-        return self._begun
-
     def begin(self, log_time_ns: int) -> None:
         """The start, at the session's first log time (once; later calls do nothing)."""
         if self._begun:
