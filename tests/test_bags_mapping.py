@@ -123,6 +123,6 @@ def test_cli_mapping_and_drone_options(tmp_path: Path) -> None:
     assert len(poses) == states and 0 < len(moved) < states  # the turtle stops once
     assert [t[0] for t in transforms] == [p[0][:2] for p in moved]
     assert (
-        f"derived /t2/: vehicle/state {states}, vehicle/transform {len(moved)}, scene 1"
+        f"derived /t2/: scene 1, vehicle/state {states}, vehicle/transform {len(moved)}"
         in result.stdout
     )

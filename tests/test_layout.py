@@ -1,7 +1,9 @@
-"""`aeroexec layout --foxglove`: a layout in Foxglove's format (Foxglove Studio's and
-Lichtblick's `LayoutData`) whose panels name what aeroexec recordings really hold: each
-topic exists with the schema its panel reads, each message path resolves to values of
-the right kind in a recorded session, the 3D panel's frames are the recording's."""
+"""`aeroexec layout --foxglove [--for REC]`: a layout in Foxglove's format (Foxglove
+Studio's and Lichtblick's `LayoutData`) whose panels name what aeroexec recordings really
+hold: each topic exists with the schema its panel reads, each message path resolves to
+values of the right kind in a recorded session, the 3D panel's frames are the
+recording's. With `--for`, for each kind of recording (run, replay in both modes, fly,
+imports), every panel shows something and every log the recording has gets a panel."""
 
 from __future__ import annotations
 
@@ -16,7 +18,11 @@ from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
-from aeroexec.viz.foxglove_layout import foxglove_layout, layout_text
+from aeroexec.viz.foxglove_layout import (
+    foxglove_layout,
+    generic_content,
+    layout_text,
+)
 
 #: Panel types Foxglove Studio 1.x and Lichtblick register (their panels/index.ts).
 PANEL_TYPES = {
@@ -39,7 +45,7 @@ PANEL_TYPES = {
     "Parameters",
     "Teleop",
 }
-_PATH = re.compile(r"^(/[\w/]+)((?:\.\w+|\[\d+\])*)$")
+_PATH = re.compile(r"^(/[\w/]+)(?:\{(\w+)=='([^']*)'\})?((?:\.\w+|\[\d+\])*)$")
 
 
 @pytest.fixture(scope="module", params=["drone1", "drone2"])
@@ -83,9 +89,12 @@ def _resolve(path: str, topics: dict[str, Any]) -> tuple[str, list[Any]]:
     it gives, one per recorded message."""
     found = _PATH.match(path)
     assert found, path
-    topic, rest = found.groups()
+    topic, key, wanted, rest = found.groups()
     assert topic in topics, topic
     name, schema, messages = topics[topic]
+    if key is not None:  # a filter on the message: the others are skipped
+        assert schema["properties"][key]["type"] == "string", (path, key)
+        messages = [m for m in messages if m[key] == wanted]
     steps = re.findall(r"\.(\w+)|\[(\d+)\]", rest)
     node = schema
     for field, _ in steps:  # the path exists in the schema Foxglove parses
@@ -104,9 +113,12 @@ def _resolve(path: str, topics: dict[str, Any]) -> tuple[str, list[Any]]:
     return name, values
 
 
-def test_every_panel_names_what_the_recording_holds(session: Any) -> None:
-    drone, topics = session
-    config = foxglove_layout(drone)["configById"]
+def check_panels(
+    config: dict[str, Any], topics: dict[str, Any], drone: str, *, every_capability: bool = True
+) -> None:
+    """Every panel of `config` shows something of the recording `topics` (each
+    capability's timeline too, unless `every_capability` is false: the generic layout
+    names the whole bundled catalog, which one session need not use)."""
     for panel_id, panel in config.items():
         kind = panel_id.split("!", 1)[0]
         if kind == "Plot":
@@ -114,17 +126,25 @@ def test_every_panel_names_what_the_recording_holds(session: Any) -> None:
                 _, values = _resolve(series["value"], topics)
                 assert values and all(isinstance(v, (int, float)) for v in values), series
         elif kind == "StateTransitions":
+            shown = 0
             for series in panel["paths"]:
                 _, values = _resolve(series["value"], topics)
-                assert values and all(isinstance(v, str) for v in values), series
+                shown += bool(values)
+                assert values or (not every_capability and panel_id.endswith("!capabilities"))
+                assert all(isinstance(v, str) for v in values) or all(
+                    type(v) is int for v in values
+                ), series
+            assert shown, panel_id
         elif kind == "RosOut":
             name, _, messages = topics[panel["topicToRender"]]
-            assert name == "foxglove.Log" and messages
+            assert name in ("foxglove.Log", "rosgraph_msgs/Log") and messages
         elif kind == "RawMessages":
             assert panel["topicPath"] in topics
         elif kind == "3D":
-            (scene,) = [t for t, v in panel["topics"].items() if v["visible"]]
-            assert topics[scene][0] == "foxglove.SceneUpdate"
+            scenes = [t for t, v in panel["topics"].items() if v["visible"]]
+            assert f"/{drone}/scene" in scenes
+            for scene in scenes:
+                assert scene not in topics or topics[scene][0] == "foxglove.SceneUpdate"
             transforms = [
                 m
                 for name, _, ms in topics.values()
@@ -139,6 +159,21 @@ def test_every_panel_names_what_the_recording_holds(session: Any) -> None:
             raise AssertionError(f"a panel this test does not check: {panel_id}")
 
 
+def test_every_panel_names_what_the_recording_holds(session: Any) -> None:
+    drone, topics = session
+    config = foxglove_layout(generic_content(drone))["configById"]
+    check_panels(config, topics, drone, every_capability=False)
+    # One timeline per capability, from the bundled catalog: those the session used
+    # are among them, and each goes back to 0 when released.
+    (capabilities,) = [p for i, p in config.items() if i == "StateTransitions!capabilities"]
+    series = {s["label"]: s["value"] for s in capabilities["paths"]}
+    used = {m["name"] for m in topics[f"/{drone}/capability_state"][2]}
+    assert len(used) >= 3 and used <= set(series)
+    for name in used:
+        _, values = _resolve(series[name], topics)
+        assert values[0] >= 1 and (values[-1] == 0 or name.startswith("SELF_LOCALIZATION"))
+
+
 def _invoke(*args: str) -> tuple[int, str, str]:
     result = CliRunner().invoke(app, list(args))
     return result.exit_code, result.stdout, result.stderr
@@ -150,7 +185,7 @@ def test_cli_writes_the_file_or_standard_output(tmp_path: Path) -> None:
     assert code == 0 and out == "" and err == f"wrote {target}\n"
     assert target.read_text() == layout_text()
     code, out, _ = _invoke("layout", "--foxglove", "--drone", "drone2")
-    assert code == 0 and out == layout_text("drone2")
+    assert code == 0 and out == layout_text(generic_content("drone2"))
     assert "/drone2/call_log" in out and "/drone1/" not in out
     assert list(tmp_path.iterdir()) == [target]  # no temporary file left
 

@@ -244,34 +244,70 @@ def test_frame_transform_from_position_and_yaw_and_log_levels(tmp_path: Path) ->
 
 
 def test_scene_holds_the_vehicle_markers_and_the_moving_object(session_file: Path) -> None:
-    scenes = [
-        (m.log_time, d) for _, c, m, d in _decoded(session_file) if c.topic == "/drone1/scene"
-    ]
-    (t0, first), *updates = scenes
-    assert t0 == 100_000_000  # with the first vehicle state
-    entities = {e["id"]: e for e in first["entities"]}
+    decoded = _decoded(session_file)
+    statics = [(m.log_time, d) for _, c, m, d in decoded if c.topic == "/drone1/scene/static"]
+    scenes = [(m.log_time, d) for _, c, m, d in decoded if c.topic == "/drone1/scene"]
     world = parse_world(DEFAULT_WORLD.read_text(), "default.yaml")
-    assert set(entities) == {"vehicle", "object"} | {f"marker/{m.id}" for m in world.markers}
-    vehicle = entities["vehicle"]
-    assert vehicle["frame_id"] == "drone1/base_link" and vehicle["frame_locked"] is True
-    assert vehicle["cubes"] and vehicle["arrows"]  # the body, and its heading
+    # The markers stand still: one message, at the start.
+    ((t_static, static),) = statics
+    assert t_static == 0
+    assert [e["id"] for e in static["entities"]] == [f"marker/{m.id}" for m in world.markers]
     for marker in world.markers:
-        entity = entities[f"marker/{marker.id}"]
+        (entity,) = [e for e in static["entities"] if e["id"] == f"marker/{marker.id}"]
         assert entity["frame_id"] == "world"
         (cube,) = entity["cubes"]
         p = cube["pose"]["position"]
         assert (p["x"], p["y"], p["z"]) == marker.position
         assert entity["texts"][0]["text"] == f"marker {marker.id}"
-    # The walker drifts at 0.05 m/s: its entity again each 0.2 m (4 s), where it is then.
+    # The vehicle and the walker, whole in every message: at the start, then each time
+    # the walker (0.05 m/s) has moved 0.2 m (4 s), where it is then.
     assert world.object is not None
-    assert [t for t, _ in updates] == [4_100_000_000, 8_100_000_000, 12_100_000_000, 16_100_000_000]
-    for t, update in [(t0, first), *updates]:
-        (obj,) = [e for e in update["entities"] if e["id"] == "object"]
+    assert [t for t, _ in scenes] == [0, 4 * 10**9, 8 * 10**9, 12 * 10**9, 16 * 10**9]
+    for t, update in scenes:
+        vehicle, obj = update["entities"]
+        assert vehicle["id"] == "vehicle" and obj["id"] == "object"
+        assert vehicle["frame_id"] == "drone1/base_link" and vehicle["frame_locked"] is True
+        assert vehicle["cubes"] and vehicle["arrows"]  # the body, and its heading
         x = obj["spheres"][0]["pose"]["position"]["x"]
         assert x == pytest.approx(world.object.at(t / 1e9)[0])
-    assert all([e["id"] for e in update["entities"]] == ["object"] for _, update in updates)
-    for _, update in scenes:
+    for _, update in statics + scenes:
         jsonschema.validate(update, schema_document("foxglove.SceneUpdate"))
+
+
+def test_the_3d_panel_has_its_frame_and_scene_at_the_first_log_time(session_file: Path) -> None:
+    # Lichtblick opens a recording at its start + 99 ms: the vehicle's frame and the
+    # scene must be there already, not with the first state (a tick later).
+    decoded = _decoded(session_file)
+    first = min(m.log_time for _, _, m, _ in decoded)
+    states = [m.log_time for _, c, m, _ in decoded if c.topic == "/drone1/vehicle/state"]
+    assert states[0] > first  # what made the panel blank: the first state comes later
+    heads = [c.topic for _, c, _, _ in decoded[:3]]
+    assert heads == ["/drone1/scene/static", "/drone1/scene", "/drone1/vehicle/transform"]
+    assert all(m.log_time == first for _, _, m, _ in decoded[:3])
+    transform = decoded[2][3]
+    world = parse_world(DEFAULT_WORLD.read_text(), "default.yaml")
+    t = transform["translation"]
+    assert (t["x"], t["y"], t["z"]) == world.start
+    assert transform["child_frame_id"] == "drone1/base_link"
+
+
+def test_start_pose_comes_before_the_first_message_and_is_not_repeated(tmp_path: Path) -> None:
+    path = tmp_path / "start.mcap"
+    with Recorder(path, start_pose=(1.0, 2.0, 0.0, 0.5)) as recorder:
+        recorder.on_topic(TopicRecord("beliefs", {"op": "add", "belief": "x"}, 7))
+        state = {"position": [1.0, 2.0, 0.0], "velocity": [0, 0, 0], "yaw": 0.5}
+        recorder.on_topic(TopicRecord("vehicle/state", {**state, "battery": 1.0}, 10))
+        moved = {**state, "position": [1.0, 2.0, 0.5]}
+        recorder.on_topic(TopicRecord("vehicle/state", {**moved, "battery": 1.0}, 20))
+    topics = [(c.topic, m.log_time) for _, c, m, _ in _decoded(path)]
+    assert topics == [
+        ("/drone1/scene", 7),  # no world: the vehicle only, and no static scene
+        ("/drone1/vehicle/transform", 7),
+        ("/drone1/beliefs", 7),
+        ("/drone1/vehicle/state", 10),  # the start pose: no second transform
+        ("/drone1/vehicle/state", 20),
+        ("/drone1/vehicle/transform", 20),
+    ]
 
 
 def test_call_log_has_one_line_per_top_level_call(session_file: Path) -> None:
@@ -470,3 +506,27 @@ def test_unwritable_path_is_a_recording_error(tmp_path: Path) -> None:
     assert str(info.value).startswith(str(blocker / "x.mcap") + ": error: ")
     with pytest.raises(RecordingError, match="error: cannot write"):
         Recorder(tmp_path)
+
+
+def test_capability_state_has_each_change_and_the_release(tmp_path: Path) -> None:
+    # One series per capability for a State Transitions panel: a release must be a
+    # message of its own (0), not an absence from the list.
+    path = tmp_path / "capabilities.mcap"
+    lists = [
+        [("A", 1)],
+        [("A", 1), ("B", 1)],
+        [("A", 2), ("B", 1)],
+        [("A", 2), ("B", 1)],  # no change: no message
+        [("B", 1)],
+        [],
+    ]
+    with Recorder(path) as recorder:
+        for tick, names in enumerate(lists):
+            data = {"capabilities": [{"name": n, "references": r} for n, r in names]}
+            recorder.on_topic(TopicRecord("list_of_active_capabilities", data, tick))
+    changes = [
+        (m.log_time, d["name"], d["references"])
+        for _, c, m, d in _decoded(path)
+        if c.topic == "/drone1/capability_state"
+    ]
+    assert changes == [(0, "A", 1), (1, "B", 1), (2, "A", 2), (4, "A", 0), (5, "B", 0)]

@@ -223,8 +223,10 @@ def test_pose_is_a_transform_per_vehicle_state(
     recordings: dict[str, Path], views: dict[str, Rrd]
 ) -> None:
     # The pose comes from vehicle/state; it agrees with the frame transform the
-    # recording carries for Foxglove (the same pose, derived by the recorder).
-    transforms = _topics(recordings["appendix_c"], "vehicle/transform")
+    # recording carries for Foxglove (the same pose, derived by the recorder), after
+    # the one at the first log time (the start pose, before the first state).
+    start, *transforms = _topics(recordings["appendix_c"], "vehicle/transform")
+    assert start.log_time_ns == 0 and start.data["translation"] == {"x": 0, "y": 0, "z": 0}
     rrd = views["appendix_c"]
     rows = rrd.rows["/vehicle"]
     assert (

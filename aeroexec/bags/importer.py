@@ -5,9 +5,10 @@ Every message of every connection is copied byte for byte to a raw `ros1` channe
 when it gives a vehicle state, the latest velocity/battery/status before it), to derive
 the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed
 `mission/command` and coordinator calls (`reconstruct.py`),
-`list_of_active_capabilities`, `beliefs`, `process_state`, `vehicle/state` (+
-`vehicle/transform` when the pose changed, and the `scene` with the vehicle's body at
-the first state), `call_log` for the reconstructed calls. Log times are the bag's.
+`list_of_active_capabilities` (+ `capability_state`), `beliefs`, `process_state`, `vehicle/state` (+
+`vehicle/transform` when the pose changed), the `scene` with the vehicle's body at the
+bag's first message when a pose is mapped (a bag has no world; its first transform
+comes with its first pose), `call_log` for the reconstructed calls. Log times are the bag's.
 Messages are written in bag time order: reconstruction decides an input only when the 2
 x grace after it has been read, so the messages from its horizon on wait (about a second
 of bag time) until it has: the bag's own in a queue (they come in time order), the
@@ -45,7 +46,14 @@ from aeroexec.bags.types import Decoder, TypeResolver
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.outputs import whole_file_or_none
 from aeroexec.progress import Advance, ProgressFactory
-from aeroexec.recording.foxglove import first_scene, vehicle_frame
+from aeroexec.recording.foxglove import (
+    CAPABILITY_TOPIC,
+    SCENE_TOPIC,
+    CapabilityChanges,
+    moving_entities,
+    scene_update,
+    vehicle_frame,
+)
 from aeroexec.recording.writer import METADATA_NAME
 
 #: The import's metadata: what replay and info read (clock and vehicle kinds).
@@ -207,6 +215,7 @@ class _Import:
         self._skipped: _Pending | None = None
         self._latest: dict[Kind, _Pending] = {}
         self.capabilities = CapabilityTracker()
+        self.capability_changes = CapabilityChanges()
         self.beliefs = BeliefTracker()
         self.processes = ProcessTracker()
         self.undecodable: dict[str, int] = {}
@@ -263,9 +272,13 @@ class _Import:
         reconstructing = self.reconstructing
         decide_after = 2 * recon.grace  # an input is decided once this much later is read
         direct = True  # nothing held: a message may be written as it comes
+        poses = any(kind is Kind.POSE for kind, _ in handlers.values())  # a vehicle to draw
         count = 0
         for connection, time_ns, data in self.bag.messages():
             count += 1
+            if count == 1 and poses:  # the 3D panel's scene from the start (nothing held)
+                scene = scene_update(moving_entities(time_ns, self.drone, None))
+                sink.derived_message(SCENE_TOPIC, time_ns, scene)
             if advance is not None and count % PROGRESS_EVERY == 0:
                 advance(PROGRESS_EVERY)
             if reconstructing:
@@ -301,7 +314,6 @@ class _Import:
             )
 
     def _state(self, pose: extract.Pose, time_ns: int) -> None:
-        first = self._last_state_ns is None
         self._last_state_ns = time_ns
         self._derive("vehicle/state", time_ns, self.vehicle.state(pose))
         # As the Recorder does: Foxglove holds the latest transform, so a vehicle that
@@ -312,8 +324,6 @@ class _Import:
             frame = pose_transform(pose, time_ns, vehicle_frame(self.drone))
             if frame is not None:
                 self._derive("vehicle/transform", time_ns, frame)
-        if first:  # a bag has no world: the scene is the vehicle's body
-            self._derive("scene", time_ns, first_scene(time_ns, self.drone, None))
 
     def _derive(self, topic: str, time_ns: int, data: dict[str, Any]) -> None:
         if not self.reconstructing:
@@ -407,6 +417,8 @@ class _Import:
             payload = self.capabilities.update(names)
             if payload is not None:
                 self._derive("list_of_active_capabilities", time_ns, payload)
+                for change in self.capability_changes.update(payload):
+                    self._derive(CAPABILITY_TOPIC, time_ns, change)
         elif kind is Kind.BELIEFS:
             snapshot = extract.beliefs(message)
             if snapshot is None:

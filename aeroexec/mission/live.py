@@ -200,6 +200,7 @@ def fly(
             },
             observers,
             code.records,
+            start=vehicle.state(),
         )
         executive = Executive(
             catalog,

@@ -97,10 +97,12 @@ def session_observers(
     observers: Iterable[BusObserver],
     records: Mapping[str, Mapping[str, str]] | None = None,
     world: World | None = None,
+    start: VehicleState | None = None,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
     recorder when one is asked for (the caller closes it). `world`: what the vehicle
-    flies in, drawn in the recording's 3D scene."""
+    flies in, drawn in the recording's 3D scene; `start`: the vehicle's state the session
+    starts from, whose pose places the vehicle in that scene from the first instant."""
     activity = ActivityLog()
     everyone: list[BusObserver] = [activity, *observers]
     recorder = None
@@ -114,6 +116,7 @@ def session_observers(
             attachments=attachments,
             records=records,
             world=world,
+            start_pose=(*start.position, start.yaw) if start is not None else None,
         )
         everyone.append(recorder)
     return activity, everyone, recorder
@@ -208,6 +211,7 @@ def simulate(
         observers,
         code.records,
         vehicle.world,
+        vehicle.state(),
     )
     with recording_session(recorder, vehicle):
         executive = Executive(

@@ -1,15 +1,25 @@
 """Messages for Foxglove's and Lichtblick's own panels, derived from what the executive
 records: the 3D panel's frame tree and scene, and a call log for the Log panel.
+`PanelFeed` derives them as a session's messages come, and hands each to a callback: the
+recorder writes them, and a live publisher can send the very same ones.
 
 * `vehicle/transform` (`foxglove.FrameTransform`): `world` -> `<drone>/base_link`, with
   each `vehicle/state` whose pose changed: the vehicle's position and yaw as the 3D
-  panel's frame tree.
-* `scene` (`foxglove.SceneUpdate`): once, with the first vehicle state: the vehicle's body
-  (a box with a heading arrow, locked to its frame, so it flies with the transforms), and,
-  when the session has a world, its visual markers and the object to follow. A moving
-  object is sent again (its entity only) each time it has moved `OBJECT_STEP_M`.
+  panel's frame tree; and at the session's first log time when its start pose is known.
+* The scene (`foxglove.SceneUpdate`), on two topics, so that the latest message of each
+  (all that Foxglove and Lichtblick show after a seek) together hold the whole scene:
+  * `scene/static`: the world's still entities (its visual markers, an object that does
+    not move), once, at the session's first log time (no message without a world);
+  * `scene`: the vehicle's body (a box with a heading arrow, locked to its frame, so it
+    flies with the transforms) and the moving object, whole in every message: at the
+    first log time, then each time the object has moved `OBJECT_STEP_M`.
 * `call_log` (`foxglove.Log`): one line per service call made at the top (by the mission,
   the executive or a behavior; the calls nested inside it are in their own channels).
+* `capability_state` (`aeroexec.CapabilityState`): `{name, references}` for each
+  capability whose reference count changed, 0 when released: one series per capability
+  for a State Transitions panel (`capability_state{name=="X"}.references`). The list of
+  active capabilities cannot give it: a released capability is absent from the list, and
+  the panel skips a message whose path yields nothing, so it would stay drawn as held.
 
 Every message is complete (all the fields Foxglove's schema requires, primitive lists
 empty when unused) and a pure function of its inputs, so recordings stay byte-identical.
@@ -19,7 +29,7 @@ Distances in metres, in the world's local ENU frame (x east, y north, z up).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -27,6 +37,12 @@ if TYPE_CHECKING:
 
 #: The frame the vehicle's position is expressed in (local ENU, the simulator's world).
 WORLD_FRAME = "world"
+#: The derived topics (inside the drone's namespace).
+TRANSFORM_TOPIC = "vehicle/transform"
+SCENE_TOPIC = "scene"
+STATIC_SCENE_TOPIC = "scene/static"
+CALL_LOG_TOPIC = "call_log"
+CAPABILITY_TOPIC = "capability_state"
 #: A moving object's entity is sent again each time the object has moved this far (m):
 #: half its size, a step the eye follows, at a cost that grows with its speed only.
 OBJECT_STEP_M = 0.2
@@ -185,41 +201,44 @@ def object_entity(log_time_ns: int, position: tuple[float, float, float]) -> dic
     )
 
 
-def world_entities(log_time_ns: int, world: World) -> list[dict[str, Any]]:
-    """The world's visual markers (one entity each) and the object to follow."""
-    entities = []
-    for marker in world.markers:
-        x, y, z = marker.position
-        box = {
-            "pose": _pose(x, y, z),
-            "size": _size(MARKER_HALF_SIZE),
-            "color": _color(MARKER_COLOR),
-        }
-        entities.append(
-            _entity(
-                log_time_ns,
-                WORLD_FRAME,
-                f"marker/{marker.id}",
-                metadata={"kind": "visual marker", "marker_id": str(marker.id)},
-                cubes=[box],
-                texts=[_text(f"marker {marker.id}", x, y, z + 2 * MARKER_HALF_SIZE[2] + 0.15)],
-            )
-        )
-    if world.object is not None:
+def marker_entity(
+    log_time_ns: int, marker_id: int, position: tuple[float, float, float]
+) -> dict[str, Any]:
+    x, y, z = position
+    box = {"pose": _pose(x, y, z), "size": _size(MARKER_HALF_SIZE), "color": _color(MARKER_COLOR)}
+    return _entity(
+        log_time_ns,
+        WORLD_FRAME,
+        f"marker/{marker_id}",
+        metadata={"kind": "visual marker", "marker_id": str(marker_id)},
+        cubes=[box],
+        texts=[_text(f"marker {marker_id}", x, y, z + 2 * MARKER_HALF_SIZE[2] + 0.15)],
+    )
+
+
+def object_moves(world: World | None) -> bool:
+    return object_period_ns(world) is not None
+
+
+def static_entities(log_time_ns: int, world: World) -> list[dict[str, Any]]:
+    """The world's still entities: its visual markers (one entity each), and the object
+    to follow when it stands still."""
+    entities = [marker_entity(log_time_ns, m.id, m.position) for m in world.markers]
+    if world.object is not None and not object_moves(world):
+        entities.append(object_entity(log_time_ns, world.object.position))
+    return entities
+
+
+def moving_entities(log_time_ns: int, drone: str, world: World | None) -> list[dict[str, Any]]:
+    """The vehicle, and the object to follow where it is at `log_time_ns` if it moves."""
+    entities = [vehicle_entity(log_time_ns, drone)]
+    if world is not None and world.object is not None and object_moves(world):
         entities.append(object_entity(log_time_ns, world.object.at(log_time_ns / _NS)))
     return entities
 
 
 def scene_update(entities: list[dict[str, Any]]) -> dict[str, Any]:
     return {"deletions": [], "entities": entities}
-
-
-def first_scene(log_time_ns: int, drone: str, world: World | None) -> dict[str, Any]:
-    """The scene sent with the first vehicle state: the vehicle, and the world if any."""
-    entities = [vehicle_entity(log_time_ns, drone)]
-    if world is not None:
-        entities += world_entities(log_time_ns, world)
-    return scene_update(entities)
 
 
 def object_period_ns(world: World | None) -> int | None:
@@ -231,6 +250,130 @@ def object_period_ns(world: World | None) -> int | None:
     if speed <= 0 or not math.isfinite(speed):
         return None
     return max(1, round(OBJECT_STEP_M / speed * _NS))
+
+
+class CapabilityChanges:
+    """Each capability's reference count when it changes, from the successive
+    `list_of_active_capabilities` payloads (in list order, then the released ones)."""
+
+    __slots__ = ("_counts",)
+
+    def __init__(self) -> None:
+        self._counts: dict[str, int] = {}
+
+    def update(self, payload: Mapping[str, Any]) -> list[dict[str, Any]]:
+        now: dict[str, int] = {}
+        for item in payload.get("capabilities") or ():
+            if isinstance(item, Mapping) and isinstance(item.get("name"), str):
+                references = item.get("references", 1)
+                now[item["name"]] = references if isinstance(references, int) else 1
+        last = self._counts
+        changes = [{"name": n, "references": c} for n, c in now.items() if last.get(n) != c]
+        changes += [{"name": n, "references": 0} for n in last if n not in now]
+        self._counts = now
+        return changes
+
+
+#: Where a derived message goes: (topic inside the namespace, log time, payload).
+Emit = Callable[[str, int, dict[str, Any]], None]
+#: A vehicle pose: x, y, z (m, ENU) and yaw (rad, counter-clockwise from east).
+Pose = tuple[float, float, float, float]
+
+
+class PanelFeed:
+    """Derives the panels' messages from a session's own, in log-time order, and hands
+    each to `emit` (the recorder writes them; a live stream can publish the same).
+
+    `begin(t)` with the session's first log time writes the start: the static scene, the
+    scene and, when `start_pose` is known, the vehicle's transform, so the 3D panel has
+    the whole scene from the first instant. A caller that does not know the start pose
+    need not call it: the start then comes with the first vehicle state."""
+
+    __slots__ = (
+        "_begun",
+        "_capabilities",
+        "_drone",
+        "_due",
+        "_emit",
+        "_frame",
+        "_last",
+        "_period",
+        "_start",
+        "_world",
+    )
+
+    def __init__(
+        self, drone: str, emit: Emit, world: World | None = None, start_pose: Pose | None = None
+    ) -> None:
+        self._drone = drone
+        self._world = world
+        self._emit = emit
+        self._frame = vehicle_frame(drone)
+        self._start = start_pose
+        self._begun = False
+        #: The pose of the last transform sent, as a vehicle/state holds it: a state with
+        #: the same pose sends none (Foxglove holds the latest transform).
+        self._last: tuple[Any, Any] | None = None
+        #: While an object moves: how often the scene is sent again, and when next.
+        self._period = object_period_ns(world)
+        self._due: int | None = None
+        self._capabilities = CapabilityChanges()
+
+    def begin(self, log_time_ns: int) -> None:
+        """The start, at the session's first log time (once; later calls do nothing)."""
+        if self._begun:
+            return
+        self._begun = True
+        emit = self._emit
+        if self._world is not None:
+            still = static_entities(log_time_ns, self._world)
+            if still:
+                emit(STATIC_SCENE_TOPIC, log_time_ns, scene_update(still))
+        self._scene(log_time_ns)
+        if self._start is not None:
+            x, y, z, yaw = self._start
+            frame = transform(x, y, z, yaw, log_time_ns, self._frame)
+            if frame is not None:
+                self._last = ([x, y, z], yaw)
+                emit(TRANSFORM_TOPIC, log_time_ns, frame)
+
+    def vehicle_state(self, state: Mapping[str, Any], log_time_ns: int) -> None:
+        """A `vehicle/state`: its transform when the pose changed; the start if not yet
+        sent; the scene again when the moving object is due."""
+        if not self._begun:
+            self.begin(log_time_ns)
+        pose = (state.get("position"), state.get("yaw"))
+        if pose != self._last:
+            self._last = pose
+            frame = state_transform(state, log_time_ns, self._frame)
+            if frame is not None:
+                self._emit(TRANSFORM_TOPIC, log_time_ns, frame)
+        due = self._due
+        if due is not None and log_time_ns >= due:
+            self._scene(log_time_ns)
+
+    def call(self, call: Mapping[str, Any], log_time_ns: int) -> None:
+        """A completed service call made at the top: its line in the call log."""
+        self._emit(CALL_LOG_TOPIC, log_time_ns, call_log_message(call, log_time_ns))
+
+    def capabilities(self, payload: Mapping[str, Any], log_time_ns: int) -> None:
+        """A `list_of_active_capabilities`: a message per capability whose count changed."""
+        for change in self._capabilities.update(payload):
+            self._emit(CAPABILITY_TOPIC, log_time_ns, change)
+
+    def _scene(self, log_time_ns: int) -> None:
+        self._emit(
+            SCENE_TOPIC,
+            log_time_ns,
+            scene_update(moving_entities(log_time_ns, self._drone, self._world)),
+        )
+        period, due = self._period, self._due
+        if period is None:
+            return
+        if due is None:
+            self._due = log_time_ns + period
+        else:  # on the period's grid (a state may come after a due time has passed)
+            self._due = due + period * (1 + (log_time_ns - due) // period)
 
 
 # -- the call log ----------------------------------------------------------------------------

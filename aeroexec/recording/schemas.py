@@ -43,6 +43,7 @@ SERVICE_CALL = "aeroexec.ServiceCall"
 BEHAVIOR_EVENT = "aeroexec.BehaviorEvent"
 ACTIVE_BEHAVIORS = "aeroexec.ActiveBehaviors"
 ACTIVE_CAPABILITIES = "aeroexec.ActiveCapabilities"
+CAPABILITY_STATE = "aeroexec.CapabilityState"
 PROCESS_STATE = "aeroexec.ProcessState"
 BELIEF_CHANGE = "aeroexec.BeliefChange"
 MISSION_COMMAND = "aeroexec.MissionCommand"
@@ -143,6 +144,12 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         {"behaviors": {"type": "array", "items": {"type": "string"}}},
         ["behaviors"],
     ),
+    CAPABILITY_STATE: _object(
+        CAPABILITY_STATE,
+        "A capability whose reference count changed, and the count now (0: released).",
+        {"name": {"type": "string"}, "references": {"type": "integer", "minimum": 0}},
+        ["name", "references"],
+    ),
     ACTIVE_CAPABILITIES: _object(
         ACTIVE_CAPABILITIES,
         "The referenced capabilities with their reference counts, in catalog order.",
@@ -242,12 +249,14 @@ TOPIC_SCHEMAS: dict[str, str] = {
     "behavior_event": BEHAVIOR_EVENT,
     "list_of_active_behaviors": ACTIVE_BEHAVIORS,
     "list_of_active_capabilities": ACTIVE_CAPABILITIES,
+    "capability_state": CAPABILITY_STATE,
     "process_state": PROCESS_STATE,
     "beliefs": BELIEF_CHANGE,
     "mission/command": MISSION_COMMAND,
     "vehicle/state": VEHICLE_STATE,
     "vehicle/transform": FOXGLOVE_FRAME_TRANSFORM,
     "scene": FOXGLOVE_SCENE_UPDATE,
+    "scene/static": FOXGLOVE_SCENE_UPDATE,
     "log": FOXGLOVE_LOG,
     "call_log": FOXGLOVE_LOG,
 }

@@ -11,9 +11,13 @@ The file (see docs/recording.md): profile `aeroexec`, JSON messages with one JSO
 per channel, channels `/<drone>/<service>` (one per service, the completed call) and
 `/<drone>/<topic>` (behavior_event, list_of_active_behaviors, list_of_active_capabilities,
 process_state, beliefs, mission/command, vehicle/state, log as `foxglove.Log`) plus what
-Foxglove's panels need (foxglove.py): `vehicle/transform` (`foxglove.FrameTransform`, with
-each vehicle/state whose pose changed), `scene` (`foxglove.SceneUpdate`: the vehicle's
-body and the world) and `call_log` (`foxglove.Log`, one line per top-level call).
+Foxglove's panels need (foxglove.py `PanelFeed`): `vehicle/transform`
+(`foxglove.FrameTransform`, with each vehicle/state whose pose changed), `scene/static` and
+`scene` (`foxglove.SceneUpdate`: the world's still entities; the vehicle's body and the
+moving object), `call_log` (`foxglove.Log`, one line per top-level call) and
+`capability_state` (each capability's reference count when it changes). Given the
+vehicle's `start_pose`, the scene and the first transform are written at the session's
+first log time, before its first message.
 Channels are created when first used, so their ids follow first-use order. Log time and
 publish time are the record's clock time; the MCAP sequence number counts messages from 0.
 
@@ -55,15 +59,7 @@ from mcap.writer import __version__ as MCAP_VERSION
 from aeroexec import __version__, interrupts
 from aeroexec.errors import Mark, OutputLost, RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
-from aeroexec.recording.foxglove import (
-    call_log_message,
-    first_scene,
-    object_entity,
-    object_period_ns,
-    scene_update,
-    state_transform,
-    vehicle_frame,
-)
+from aeroexec.recording.foxglove import PanelFeed, Pose
 from aeroexec.recording.schemas import (
     LOG_LEVELS,
     MESSAGE_ENCODING,
@@ -251,6 +247,7 @@ class Recorder:
         flush_interval_ns: int = FLUSH_INTERVAL_NS,
         compression: str = "lz4",
         world: World | None = None,
+        start_pose: Pose | None = None,
     ) -> None:
         if flush_messages < 1 or flush_interval_ns < 0:
             raise ValueError("flush bounds must be positive")
@@ -284,16 +281,10 @@ class Recorder:
         #: service -> channel id, topic (inside the namespace) -> channel id
         self._services: dict[str, int] = {}
         self._topics: dict[str, int] = {}
-        #: The scene: written with the first vehicle state; a moving object follows.
-        self._world = world
-        self._vehicle_frame = vehicle_frame(self.drone)
-        self._scene_written = False
-        #: The pose of the last transform written: a state with the same pose writes none.
-        self._last_pose: tuple[Any, Any] | None = None
-        period = object_period_ns(world)
-        #: (the object to follow, how often its entity is sent again) when it moves
-        self._moving = (world.object, period) if world and world.object and period else None
-        self._object_due_ns = 0
+        #: The messages for Foxglove's panels. With the start pose known, their start
+        #: comes before the session's first message; without, with the first state.
+        self._panels = PanelFeed(self.drone, self._derived, world, start_pose)
+        self._await_start = start_pose is not None
         self._count = 0
         self._pending = 0
         self._pending_since = 0
@@ -315,6 +306,8 @@ class Recorder:
 
     # -- BusObserver ---------------------------------------------------------------------
     def on_service_call(self, record: ServiceCallRecord) -> None:
+        if self._await_start:
+            self._begin_panels(record.log_time_ns)
         service = record.service
         channel = self._services.get(service)
         if channel is None:
@@ -323,7 +316,7 @@ class Recorder:
         log_time_ns = record.log_time_ns
         self._write(channel, log_time_ns, encode_json(data))
         if record.parent_seq is None:
-            self._derived("call_log", log_time_ns, call_log_message(data, log_time_ns))
+            self._panels.call(data, log_time_ns)
 
     def on_topic(self, record: TopicRecord) -> None:
         self.write_topic(record.topic, record.data, record.log_time_ns)
@@ -331,6 +324,8 @@ class Recorder:
     # -- public --------------------------------------------------------------------------
     def write_topic(self, topic: str, data: Mapping[str, Any], log_time_ns: int) -> None:
         """Record `data` on `/<drone>/<topic>` (what `on_topic` does for the bus)."""
+        if self._await_start:
+            self._begin_panels(log_time_ns)
         channel = self._topics.get(topic)
         if channel is None:
             channel = self._topics[topic] = self._channel(
@@ -342,7 +337,9 @@ class Recorder:
             data = without_nulls(data)
         self._write(channel, log_time_ns, encode_json(data))
         if topic == "vehicle/state":
-            self._vehicle_derived(data, log_time_ns)
+            self._panels.vehicle_state(data, log_time_ns)
+        elif topic == "list_of_active_capabilities":
+            self._panels.capabilities(data, log_time_ns)
 
     @property
     def messages_written(self) -> int:
@@ -424,27 +421,10 @@ class Recorder:
             )
         self._write(channel, log_time_ns, encode_json(data))
 
-    def _vehicle_derived(self, state: Mapping[str, Any], log_time_ns: int) -> None:
-        """The frame transform of each state whose pose (position, yaw) differs from the
-        last one sent (Foxglove holds the latest transform: a hovering or landed vehicle
-        needs none); the scene with the first; the moving object again each time it has
-        moved OBJECT_STEP_M (at the first state after that)."""
-        pose = (state.get("position"), state.get("yaw"))
-        if pose != self._last_pose:
-            self._last_pose = pose
-            transform = state_transform(state, log_time_ns, self._vehicle_frame)
-            if transform is not None:
-                self._derived("vehicle/transform", log_time_ns, transform)
-        if not self._scene_written:
-            self._scene_written = True
-            self._derived("scene", log_time_ns, first_scene(log_time_ns, self.drone, self._world))
-            if self._moving is not None:
-                self._object_due_ns = log_time_ns + self._moving[1]
-        elif self._moving is not None and log_time_ns >= self._object_due_ns:
-            moving, period = self._moving
-            self._object_due_ns += period * (1 + (log_time_ns - self._object_due_ns) // period)
-            where = moving.at(log_time_ns / 1e9)
-            self._derived("scene", log_time_ns, scene_update([object_entity(log_time_ns, where)]))
+    def _begin_panels(self, log_time_ns: int) -> None:
+        """The panels' start, at the session's first log time."""
+        self._await_start = False
+        self._panels.begin(log_time_ns)
 
     def _start(
         self,

@@ -202,7 +202,14 @@ def _replay_commands(
     metadata.update(stand_in_metadata(code))
     attachments = {"catalog.yaml": catalog.text, "world.yaml": world[0], **code.attachments}
     _, observers, recorder = session_observers(
-        output, drone, metadata, attachments, [observer, *watchers], code.records, vehicle.world
+        output,
+        drone,
+        metadata,
+        attachments,
+        [observer, *watchers],
+        code.records,
+        vehicle.world,
+        vehicle.state(),
     )
     with recording_session(recorder, vehicle):
         executive = Executive(

@@ -164,6 +164,7 @@ def replay_live(
         attachments,
         [OutcomeObserver(builder), *watchers],
         code.records,
+        start=vehicle.state(),
     )
     try:
         executive = Executive(

@@ -67,6 +67,7 @@ def replay_open(
         metadata,
         {"catalog.yaml": catalog.text},
         [OutcomeObserver(builder, offset_ns=offset), *watchers],
+        start=vehicle.state(),
     )
     try:
         with recording_session(recorder):
