@@ -14,7 +14,13 @@ from aeroexec.catalog import load_catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, guarded
 from aeroexec.cli.options import Color, catalog_option, color_option, format_option, use_color
-from aeroexec.cli.project import BehaviorsOption, catalog_path, project, project_behaviors
+from aeroexec.cli.project import (
+    BehaviorsOption,
+    DisablePluginOption,
+    catalog_path,
+    project,
+    project_behaviors,
+)
 from aeroexec.cli.tables import print_table
 from aeroexec.plugins import Implementation
 
@@ -26,8 +32,10 @@ class OutputFormat(str, Enum):
 
 def _source(implementation: Implementation) -> str:
     origin = f" ({implementation.origin})" if not implementation.standard else ""
-    overrides = ", replaces the standard library's" if implementation.overrides else ""
-    return f"{implementation.source}{origin}{overrides}"
+    replaced = [f"installed {implementation.shadows.origin}"] if implementation.shadows else []
+    replaced += ["the standard library's"] if implementation.overrides else []
+    replaces = f", replaces {' and '.join(replaced)}" if replaced else ""
+    return f"{implementation.source}{origin}{replaces}"
 
 
 def _as_dict(implementation: Implementation, in_catalog: bool) -> dict[str, Any]:
@@ -40,6 +48,9 @@ def _as_dict(implementation: Implementation, in_catalog: bool) -> dict[str, Any]
         "source": implementation.source,
         "origin": implementation.origin,
         "overrides_standard": implementation.overrides,
+        "replaces_plugin": (
+            implementation.shadows.reference if implementation.shadows is not None else None
+        ),
         "in_catalog": in_catalog,
         "argument_names": (
             list(implementation.cls.argument_names)
@@ -56,6 +67,7 @@ def behaviors_command(
         "Catalog to check (default: the project's, else the bundled default)."
     ),
     behaviors: BehaviorsOption = None,
+    disable_plugin: DisablePluginOption = None,
     output_format: OutputFormat = format_option(
         OutputFormat, "text (a table) or json (every field, for machines)."
     ),
@@ -74,7 +86,7 @@ def behaviors_command(
     2 the catalog, the configuration or a behavior module could not be used.
     """
     settings = project()
-    found = project_behaviors(behaviors, settings)
+    found = project_behaviors(behaviors, settings, disable_plugin)
     chosen = catalog_path(catalog, settings, DEFAULT_CATALOG)
     loaded = load_catalog(chosen)
     missing = found.missing(loaded)

@@ -27,6 +27,7 @@ from aeroexec.cli.options import (
 from aeroexec.cli.project import (
     AllowUnimplementedOption,
     BehaviorsOption,
+    DisablePluginOption,
     catalog_path,
     first,
     project,
@@ -137,6 +138,7 @@ def fly_command(
         show_default=True,
     ),
     behaviors: BehaviorsOption = None,
+    disable_plugin: DisablePluginOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
@@ -175,7 +177,7 @@ def fly_command(
         signing_key=signing_key,
         allow_remote=allow_remote,
         connect_timeout=connect_timeout,
-        behaviors=project_behaviors(behaviors, settings),
+        behaviors=project_behaviors(behaviors, settings, disable_plugin),
         allow_unimplemented=allow_unimplemented,
         baud=baud,
     )

@@ -25,10 +25,15 @@ from aeroexec.cli.options import (
     output_option,
     replaced,
 )
-from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
+from aeroexec.cli.project import (
+    BehaviorsOption,
+    DisablePluginOption,
+    behavior_sources,
+    discovered_behaviors,
+    project,
+)
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
-from aeroexec.plugins import discover
 from aeroexec.progress import ProgressFactory, progress_bar
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
@@ -167,6 +172,7 @@ def replay(
         "one per CPU; --executor local)."
     ),
     behaviors: BehaviorsOption = None,
+    disable_plugin: DisablePluginOption = None,
     shard: Annotated[
         str | None,
         typer.Option(
@@ -237,8 +243,8 @@ def replay(
     started = time.perf_counter()
     if catalog is not None:
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
-    sources = behavior_sources(behaviors, project())
-    discover(sources)  # so are bad behaviors (and the replays reuse what was found)
+    sources = behavior_sources(behaviors, project(), disable_plugin)
+    discovered_behaviors(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
     options = ReplayOptions(

@@ -27,6 +27,7 @@ from aeroexec.cli.options import (
 from aeroexec.cli.project import (
     AllowUnimplementedOption,
     BehaviorsOption,
+    DisablePluginOption,
     catalog_path,
     first,
     project,
@@ -122,6 +123,7 @@ def run(
     output: Path | None = output_option("Record the session to this MCAP file."),
     record: Path | None = deprecated_option("--record", "-r", instead="-o/--output"),
     behaviors: BehaviorsOption = None,
+    disable_plugin: DisablePluginOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
     max_sim_time: float = typer.Option(
         DEFAULT_MAX_SIM_TIME_S,
@@ -160,7 +162,7 @@ def run(
         seed=first(seed, settings.seed, 0),
         world=first(world, settings.world, None),
         record=output,
-        behaviors=project_behaviors(behaviors, settings),
+        behaviors=project_behaviors(behaviors, settings, disable_plugin),
         allow_unimplemented=allow_unimplemented,
         max_sim_time_s=max_sim_time or None,
     )
