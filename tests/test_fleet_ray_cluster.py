@@ -257,3 +257,32 @@ def test_each_wrong_connection_is_one_line_naming_its_cause_at_once(
     assert line.startswith(f"aeroexec replay: error: cannot reach Ray on {address}: "), line
     assert says in line and line.endswith("(see docs/fleet.md#when-ray-client-cannot-connect)")
     assert took < 25, f"{took:.0f} s: Ray Client's own timeout is ~30 s"
+
+
+@pytest.mark.parametrize(
+    ("ray_file", "message", "cause"),
+    [
+        (
+            "util/client/server/proxier.py",
+            "Starting Ray client server failed",
+            "exited before serving: its log is ray_client_server_<port>.err",
+        ),
+        (
+            "util/client/server/proxier.py",
+            "Proxy failed to Connect to backend",
+            "RAY_CLIENT_SERVER_CHECK_CHANNEL_TIMEOUT_S (30 s by default)",
+        ),
+        ("util/client/worker.py", "ray client connection timeout", "within Ray's retries"),
+    ],
+)
+def test_the_head_proxys_failures_get_their_causes(ray_file: str, message: str, cause: str) -> None:
+    """The messages the hints recognize are the installed Ray's own (a Ray that rewords
+    them turns this red rather than the hints silent)."""
+    ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'aeroexec[ray]')")
+    from aeroexec.replay.ray_client_check import hint
+
+    assert message in (Path(ray.__file__).parent / ray_file).read_text(encoding="utf-8")
+    said = hint(f"ConnectionAbortedError: Initialization failure from server:\n{message}.")
+    assert said.startswith("; ") and cause in said
+    assert said.endswith("(see docs/fleet.md#when-ray-client-cannot-connect)")
+    assert hint("some other failure") == ""
