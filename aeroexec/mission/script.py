@@ -23,7 +23,7 @@ from aeroexec.errors import AeroexecError, Mark, MissionError, one_line
 from aeroexec.executive.executive import TimeLimitReached
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import handling as handling_signals
-from aeroexec.mission.api import MODULE_NAME, MissionAPI
+from aeroexec.mission.api import MISSION_NAMESPACE, MODULE_NAME, MissionAPI
 
 ENTRY_POINTS = ("runMission", "run_mission", "main")
 
@@ -89,7 +89,7 @@ def run_script(script: MissionScript, api: MissionAPI) -> MissionOutcome:
     Exceptions raised by the mission are the mission's failure (an outcome), not ours;
     a script without an entry point is unusable input (`MissionError`).
     """
-    namespace: dict[str, Any] = {"__name__": "__aeroexec_mission__", "__file__": script.path}
+    namespace: dict[str, Any] = {"__name__": MISSION_NAMESPACE, "__file__": script.path}
     previous = sys.modules.get(MODULE_NAME)
     sys.modules[MODULE_NAME] = api.as_module()
     try:
