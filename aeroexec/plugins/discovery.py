@@ -6,12 +6,12 @@
 4. aeroexec's standard library, last.
 
 The order is a precedence between levels: the project's own behaviors (1 and 2) replace
-an installed plugin's of the same name (the command line says so in a note: the plugin
-is imported, its class of that name does not run), and both replace the standard
-library's. Within one level two implementations of one name are an
-error naming both: `--behaviors` and the configuration are both the project's own, and
-two installed plugins have no order between them, so nothing decides silently which one
-flies.
+an installed plugin's of the same name, and both replace the standard library's. The
+replaced plugin is still imported (which behaviors it has is only known then); its class
+of that name does not run, and the command says so in a note (`BehaviorSet.notes`).
+Within one level two implementations of one name are an error naming both: `--behaviors`
+and the configuration are both the project's own, and two installed plugins have no order
+between them, so nothing decides silently which one flies.
 
 Plugins load automatically, as pytest's do, and can be turned off the same two ways:
 all of them with the environment variable `AEROEXEC_DISABLE_PLUGIN_AUTOLOAD=1` (a
