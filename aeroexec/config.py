@@ -12,6 +12,7 @@ same answer from any subdirectory of the project.
     world = "worlds/field.yaml"                        # run
     seed = 7                                           # run
     connect = "udpin:127.0.0.1:14551"                  # fly
+    disable_plugins = ["dronetricks"]                  # installed plugins not to load
 
 An option on the command line wins over the file; the file wins over aeroexec's own
 defaults. A malformed file is a `ConfigError` naming the file and line.
@@ -46,6 +47,8 @@ class ProjectConfig:
     world: Path | None = None
     seed: int | None = None
     connect: str | None = None
+    #: Installed plugins (distribution names) whose entry points are not loaded.
+    disable_plugins: tuple[str, ...] | None = None
 
     @property
     def root(self) -> Path:
@@ -156,6 +159,7 @@ _KEYS: Mapping[str, tuple[Callable[[Any], Any], str]] = {
     "world": (_nonempty, "a file path (text)"),
     "seed": (_integer, "an integer"),
     "connect": (_nonempty, "a MAVLink endpoint (text), e.g. udpin:127.0.0.1:14550"),
+    "disable_plugins": (_names, "a list of installed plugins' distribution names"),
 }
 
 
@@ -183,6 +187,7 @@ def _parse(path: Path, table: dict[str, Any]) -> ProjectConfig:
         world=_resolve(root, values.get("world")),
         seed=values.get("seed"),
         connect=values.get("connect"),
+        disable_plugins=values.get("disable_plugins"),
     )
 
 

@@ -197,6 +197,7 @@ def test_json_form() -> None:
             "(was 2.0 s; tolerance 0.5 s)",
             "base_index": 0,
             "new_index": 0,
+            "line": None,  # no mission script named
         }
     ]
 
@@ -251,13 +252,15 @@ def test_diff_json_and_tolerance(pair: tuple[Path, Path, Path]) -> None:
 def test_diff_junit(pair: tuple[Path, Path, Path]) -> None:
     base, again, narrow = pair
     _, out, _ = cli(str(base), str(narrow), "--format", "junit")
-    suite = ET.fromstring(out)
+    root = ET.fromstring(out)
+    assert root.tag == "testsuites" and (root.get("tests"), root.get("failures")) == ("1", "1")
+    (suite,) = root.findall("testsuite")
     assert (suite.get("tests"), suite.get("failures")) == ("1", "1")
     (case,) = suite.findall("testcase")
     failure = case.find("failure")
     assert failure is not None and "#4 GO_TO_POINT" in (failure.text or "")
     _, out, _ = cli(str(base), str(again), "--format", "junit")
-    (case,) = ET.fromstring(out).findall("testcase")
+    (case,) = ET.fromstring(out).findall("testsuite/testcase")
     assert case.find("failure") is None
 
 

@@ -130,9 +130,10 @@ def cluster() -> Iterator[tuple[str, dict[str, str]]]:
     client_port = free_port()
     env = {k: v for k, v in os.environ.items() if not k.startswith("RAY_")}
     env |= {"RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN": secrets.token_hex(32)}
-    # The head starts a Ray Client server process per client and waits 30 s for it; on a
-    # loaded two-core CI machine its start (importing ray) took longer and the client
-    # was refused ("Starting Ray client server failed").
+    # The head starts a Ray Client server process per client and waits 30 s for it to
+    # answer ("Proxy failed to Connect to backend" after that); on a loaded two-core
+    # machine its start (importing ray) can take longer (docs/fleet.md, "When Ray Client
+    # cannot connect").
     env["RAY_CLIENT_SERVER_CHECK_CHANNEL_TIMEOUT_S"] = "180"
     head = subprocess.Popen(
         [

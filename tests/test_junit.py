@@ -1,11 +1,13 @@
-"""JUnit reports of `replay` and `diff` for CI test-report tools: every testcase names
-its recording in `file` (GitHub's test-report actions annotate that file, else they guess
-from `classname`) and its duration in `time`; the suite has a `timestamp` (UTC) and a
-`time`. With SOURCE_DATE_EPOCH set, the report is reproducible: that timestamp, every
-duration 0, the same bytes for the same results."""
+"""JUnit reports of `replay` and `diff` for CI test-report tools: a `<testsuites>` root;
+every testcase is named by its recording and points, in `file` and `line`, at the mission
+script's line of its first difference (test-report actions annotate that, not a binary
+.mcap), and has its duration in `time`; the suite has a `timestamp` (UTC) and a `time`.
+With SOURCE_DATE_EPOCH set, the report is reproducible: that timestamp, every duration
+0, the same bytes for the same results."""
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import time
@@ -14,6 +16,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 import pytest
+from test_replay_support import catalog_for
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
@@ -49,12 +52,19 @@ def test_replay_testcases_name_their_recording_and_duration(flights: Path) -> No
     )
     after = datetime.now(UTC).replace(tzinfo=None)
     assert code == 2  # c.mcap is unreadable
-    suite = ET.fromstring(out)
+    suite = _suite(out)
     cases = suite.findall("testcase")
-    assert [c.get("file") for c in cases] == [
+    assert [c.get("name") for c in cases] == [
         str(flights / n) for n in ("a.mcap", "b.mcap", "c.mcap")
     ]
-    assert [c.get("name") for c in cases] == [c.get("file") for c in cases]
+    # The mission as the recording names it (its file name) for the replayed ones, the
+    # recording for the unreadable one; no line without a difference.
+    assert [c.get("file") for c in cases] == [
+        APPENDIX_C.name,
+        APPENDIX_C.name,
+        cases[2].get("name"),
+    ]
+    assert [c.get("line") for c in cases] == [None, None, None]
     durations = [float(c.get("time", "")) for c in cases]
     assert durations[0] > 0 and durations[1] > 0  # a closed-loop replay takes time
     stamp = suite.get("timestamp", "")
@@ -69,9 +79,10 @@ def test_diff_testcase_is_attached_to_the_new_recording(flights: Path) -> None:
         "diff", str(flights / "a.mcap"), str(flights / "b.mcap"), "--format", "junit"
     )
     assert code == 0
-    suite = ET.fromstring(out)
+    suite = _suite(out)
     (case,) = suite.findall("testcase")
-    assert case.get("file") == str(flights / "b.mcap")
+    assert case.get("name") == f"{flights / 'a.mcap'} -> {flights / 'b.mcap'}"
+    assert case.get("file") == APPENDIX_C.name and case.get("line") is None
     assert float(case.get("time", "")) > 0
     assert ISO.match(suite.get("timestamp", ""))
 
@@ -81,7 +92,7 @@ def test_source_date_epoch_makes_the_report_reproducible(flights: Path) -> None:
     args = ("replay", str(flights / "a.mcap"), str(flights / "b.mcap"), "--format", "junit")
     code, first, _ = _cli(*args, env=env)
     assert code == 0
-    suite = ET.fromstring(first)
+    suite = _suite(first)
     assert suite.get("timestamp") == "2023-11-14T22:13:20"
     assert suite.get("time") == "0.000"
     assert {c.get("time") for c in suite.findall("testcase")} == {"0.000"}
@@ -91,6 +102,57 @@ def test_source_date_epoch_makes_the_report_reproducible(flights: Path) -> None:
         "diff", str(flights / "a.mcap"), str(flights / "b.mcap"), "--format", "junit", env=env
     )
     assert code == 0 and 'timestamp="2023-11-14T22:13:20"' in out and 'time="0.000"' in out
+
+
+def _suite(xml: str) -> ET.Element:
+    """The one testsuite of a report, under its `<testsuites>` root with the same totals."""
+    root = ET.fromstring(xml)
+    assert root.tag == "testsuites"
+    (suite,) = root.findall("testsuite")
+    for total in ("name", "tests", "failures", "errors", "skipped", "time", "timestamp"):
+        assert root.get(total) == suite.get(total), total
+    return suite
+
+
+#: The line of the Appendix C mission that flies to (3, 5.5, 1.3): the command a catalog
+#: whose GO_TO_POINT allows [-2, 2] only rejects, the first difference.
+FAR_POINT = next(
+    number
+    for number, text in enumerate(APPENDIX_C.read_text(encoding="utf-8").splitlines(), 1)
+    if "coordinates=[3, 5.5, 1.3]" in text
+)
+
+
+def test_a_difference_points_at_its_line_of_the_mission(flights: Path, tmp_path: Path) -> None:
+    narrowed = catalog_for(tmp_path, "narrowed")
+    env = {"SOURCE_DATE_EPOCH": "1700000000"}
+    args = ["replay", str(flights / "a.mcap"), "-c", str(narrowed), "-f", "junit"]
+    # The recorded commands, replayed: their recorded lines, in the recorded mission.
+    code, out, _ = _cli(*args, env=env)
+    assert code == 0
+    (case,) = _suite(out).findall("testcase")
+    assert case.find("failure") is not None
+    assert (case.get("file"), case.get("line")) == (APPENDIX_C.name, str(FAR_POINT))
+    # Your copy of the mission, moved down two lines: the lines of your copy.
+    mine = tmp_path / "mine.py"
+    mine.write_text("# mine\n\n" + APPENDIX_C.read_text(encoding="utf-8"), encoding="utf-8")
+    code, out, _ = _cli(*args, "-m", str(mine), "-o", str(tmp_path / "r.mcap"), env=env)
+    (case,) = _suite(out).findall("testcase")
+    assert (case.get("file"), case.get("line")) == (str(mine), str(FAR_POINT + 2))
+    # The same line in a diff of the recording and that replay, and in JSON.
+    # (a recording names its mission by its file name).
+    code, out, _ = _cli("diff", str(flights / "a.mcap"), str(tmp_path / "r.mcap"), "-f", "junit")
+    (case,) = _suite(out).findall("testcase")
+    assert (case.get("file"), case.get("line")) == (mine.name, str(FAR_POINT + 2))
+    code, out, _ = _cli(*args[:-2], "-f", "json")
+    (first, *_) = json.loads(out)["recordings"][0]["differences"]
+    assert first["line"] == FAR_POINT
+    # Shards merged give the report of the whole run, lines included.
+    shard = tmp_path / "shard.json"
+    code, out, _ = _cli(*args[:-2], "--shard", "1/1", "-f", "json")
+    shard.write_text(out, encoding="utf-8")
+    merged = _cli("report", "merge", str(shard), "-f", "junit", env=env)[1]
+    assert merged == _cli(*args, env=env)[1]
 
 
 def test_a_malformed_source_date_epoch_is_an_error_for_junit_only(flights: Path) -> None:
@@ -114,3 +176,4 @@ def test_timing_units() -> None:
     assert ReplayResult("x", seconds=1.0) == ReplayResult("x", seconds=2.0)
     xml = replay_junit([ReplayResult("x.mcap", error="no", seconds=0.25)], timing=timing)
     assert '<testcase classname="aeroexec.replay" name="x.mcap" file="x.mcap" time="0.250">' in xml
+    assert xml.splitlines()[1].startswith('<testsuites name="aeroexec replay" tests="1"')

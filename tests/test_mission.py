@@ -80,7 +80,12 @@ def test_mission_commands_are_published_before_their_effect() -> None:
         "activate_behavior",
         "execute_behavior",
     ]
-    assert {"command": "consult_belief", "query": "position(self, (?X, ?Y, ?Z))"} in commands
+    # Each names the line of the mission that made it.
+    text = APPENDIX_C.read_text(encoding="utf-8").splitlines()
+    consult = next(n for n, line in enumerate(text, 1) if "api.consultBelief(" in line)
+    query = "position(self, (?X, ?Y, ?Z))"
+    assert {"command": "consult_belief", "query": query, "line": consult} in commands
+    assert all("api." in text[c["line"] - 1] for c in commands)
     activations = [r for r in observer.calls("activate_behavior") if r.parent_seq is None]
     assert len(activations) == sum(
         c["command"] in ("execute_behavior", "activate_behavior") for c in commands

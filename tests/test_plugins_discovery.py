@@ -4,6 +4,7 @@ points, the standard library; overriding, duplicates, and every way a plugin can
 
 from __future__ import annotations
 
+import sys
 import textwrap
 from pathlib import Path
 
@@ -302,22 +303,129 @@ def test_entry_points_of_installed_packages_are_found(
     assert loop.source == "entry point" and "dronetricks 1.0" in loop.origin
     assert hover.reference == "dronetricks_single:Hover" and hover.overrides
     assert "entry points 'aeroexec.behaviors' (2 installed)" in found.searched
-    # ... after --behaviors, which may not implement the same name again.
+    assert found.notes() == ()
+
+
+def test_the_projects_own_behavior_replaces_an_installed_plugins_with_a_note(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The README's order is a precedence: --behaviors (and the configuration) before
+    installed plugins, before the standard library."""
+    site = tmp_path / "site"
+    install(
+        site,
+        "dronetricks",
+        "tricks = dronetricks_behaviors",
+        {"dronetricks_behaviors.py": BEHAVIOR.format(cls="Loop", name="LOOP")},
+    )
+    monkeypatch.syspath_prepend(str(site))
     write(tmp_path / "mine.py", BEHAVIOR.format(cls="MyLoop", name="LOOP"))
-    error = error_of(BehaviorSources(command_line=(str(tmp_path / "mine.py"),)))
-    assert "LOOP is implemented twice" in error.message
-    assert "from entry point tricks = dronetricks_behaviors (dronetricks 1.0)" in error.message
+    found = discover(BehaviorSources(command_line=(str(tmp_path / "mine.py"),)))
+    loop = found.implementations["LOOP"]
+    assert (loop.reference, loop.source) == ("mine:MyLoop", "--behaviors")
+    assert loop.shadows is not None and loop.shadows.reference == "dronetricks_behaviors:Loop"
+    (note,) = found.notes()
+    assert note.startswith("LOOP: mine:MyLoop (") and str(tmp_path / "mine.py") in note
+    assert note.endswith(
+        "replaces the installed plugin's dronetricks_behaviors:Loop "
+        "(from tricks = dronetricks_behaviors (dronetricks 1.0))"
+    )
+    # The same from the project configuration.
+    write(tmp_path / "aeroexec.toml", 'behaviors = ["mine.py"]\n')
+    found = discover(sources_for(config=load_config(tmp_path)))
+    assert found.implementations["LOOP"].reference == "mine:MyLoop" and found.notes()
 
 
-def test_an_entry_point_naming_something_else_is_an_error(
+def test_two_installed_plugins_implementing_one_name_is_an_error_naming_both(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    site = tmp_path / "site"
+    install(site, "alpha", "a = alpha_b", {"alpha_b.py": BEHAVIOR.format(cls="A", name="LOOP")})
+    install(site, "beta", "b = beta_b", {"beta_b.py": BEHAVIOR.format(cls="B", name="LOOP")})
+    monkeypatch.syspath_prepend(str(site))
+    error = error_of(BehaviorSources())
+    assert "behavior LOOP is implemented twice" in error.message
+    assert "(alpha 1.0)" in error.message and "(beta 1.0)" in error.message
+    assert "turn one off with --disable-plugin NAME" in error.message
+    # Turning one off settles it, and only the other is imported.
+    found = discover(BehaviorSources(disabled_plugins=("Beta",)))
+    assert found.implementations["LOOP"].reference == "alpha_b:A"
+    assert "entry points 'aeroexec.behaviors' (2 installed, 1 turned off)" in found.searched
+
+
+DISABLE_HINT = (
+    "turn it off with --disable-plugin {name} "
+    "(or every installed plugin with AEROEXEC_DISABLE_PLUGIN_AUTOLOAD=1)"
+)
+
+
+def test_an_entry_point_naming_something_else_is_an_error_at_its_declaration(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     site = tmp_path / "site"
     install(site, "oddity", "odd = oddity_mod:VALUE", {"oddity_mod.py": "VALUE = 3\n"})
     monkeypatch.syspath_prepend(str(site))
     error = error_of(BehaviorSources())
-    assert error.mark is not None and error.mark.file.startswith("entry point odd = oddity_mod")
-    assert "names int, not a module or a Behavior subclass" in error.message
+    declared = site / "oddity-1.0.dist-info" / "entry_points.txt"
+    assert error.mark is not None
+    assert (error.mark.file, error.mark.line) == (str(declared), 2)
+    assert error.message == (
+        "installed plugin oddity 1.0 (entry point odd = oddity_mod:VALUE) names int, not a "
+        "module or a Behavior subclass; " + DISABLE_HINT.format(name="oddity")
+    )
+
+
+@pytest.mark.parametrize(
+    ("module", "line", "problem"),
+    [
+        ("import nonexistent_dependency_xyz\n", 1, "failed to load: ModuleNotFoundError"),
+        ("X = 1\n\nraise RuntimeError('no licence')\n", 3, "failed to load: RuntimeError"),
+        ("def broken(:\n", 1, "is not valid Python"),
+        ("X = 1\n", 0, "{module} provides no behavior"),
+        (None, 2, "failed to load: ModuleNotFoundError: No module named '{module}'"),
+    ],
+)
+def test_a_broken_plugin_names_its_distribution_and_the_way_to_turn_it_off_once(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    module: str | None,
+    line: int,
+    problem: str,
+) -> None:
+    site = tmp_path / "site"
+    name = f"broken_tricks_{tmp_path.name}"  # one module per case: none is imported yet
+    name = "".join(c if c.isalnum() else "_" for c in name)
+    problem = problem.format(module=name)
+    files = {f"{name}.py": module} if module is not None else {}
+    install(site, "Broken_Tricks", f"tricks = {name}", files)
+    monkeypatch.syspath_prepend(str(site))
+    error = error_of(BehaviorSources())
+    assert error.mark is not None
+    expected = site / (f"{name}.py" if module else "Broken_Tricks-1.0.dist-info/entry_points.txt")
+    assert (error.mark.file, error.mark.line) == (str(expected), line)
+    what = f"installed plugin Broken_Tricks 1.0 (entry point tricks = {name})"
+    assert error.message.startswith(what) and problem in error.message
+    assert error.message.endswith("; " + DISABLE_HINT.format(name="Broken_Tricks"))
+    assert error.message.count(name) == 1 + problem.count(name)  # the entry point: once
+    # Every opt-out leaves it unimported: the standard library answers.
+    sys.modules.pop(name, None)
+    for disabled in ("broken-tricks", "BROKEN.TRICKS", "tricks"):  # pip's spellings, or the
+        found = discover(BehaviorSources(disabled_plugins=(disabled,)))  # entry point's name
+        assert found.implementations["LAND"].standard and not found.user()
+        assert name not in sys.modules
+    monkeypatch.setenv("AEROEXEC_DISABLE_PLUGIN_AUTOLOAD", "1")
+    found = discover(sources_for())
+    assert found.implementations["LAND"].standard and not found.declared
+    assert (
+        "entry points 'aeroexec.behaviors' (not loaded: AEROEXEC_DISABLE_PLUGIN_AUTOLOAD is set)"
+        in (found.searched)
+    )
+    # ... and the configuration's disable_plugins, without the variable.
+    monkeypatch.delenv("AEROEXEC_DISABLE_PLUGIN_AUTOLOAD")
+    write(tmp_path / "aeroexec.toml", 'disable_plugins = ["broken.tricks"]\n')
+    assert not discover(sources_for(config=load_config(tmp_path))).user()
+    monkeypatch.setenv("AEROEXEC_DISABLE_PLUGIN_AUTOLOAD", "0")  # "0" is not "set"
+    assert error_of(sources_for()).message == error.message
 
 
 def test_a_package_without_all_provides_its_public_submodules(tmp_path: Path) -> None:

@@ -110,8 +110,9 @@ def test_junit_has_one_testcase_per_recording(flights: Path, narrowed: Path) -> 
         "--trust-recording",
     )
     assert code == 1
-    suite = ET.fromstring(out)
-    assert suite.tag == "testsuite"
+    root = ET.fromstring(out)
+    assert root.tag == "testsuites"
+    (suite,) = root.findall("testsuite")
     assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("3", "2", "0")
     cases = suite.findall("testcase")
     assert [c.get("name") for c in cases] == [
@@ -122,6 +123,13 @@ def test_junit_has_one_testcase_per_recording(flights: Path, narrowed: Path) -> 
     assert failure is not None
     assert failure.get("message") == "2 differences"
     assert "#4 GO_TO_POINT coordinates=[3, 5.5, 1.3] now rejected" in (failure.text or "")
+    # The recorded script ran (--trust-recording): the report points at its line.
+    far = next(
+        n
+        for n, text in enumerate(APPENDIX_C.read_text(encoding="utf-8").splitlines(), 1)
+        if "coordinates=[3, 5.5, 1.3]" in text
+    )
+    assert (appendix.get("file"), appendix.get("line")) == (APPENDIX_C.name, str(far))
     survey_failure = survey.find("failure")
     assert survey_failure is not None
     assert "only in the recording: the mission took another path" in (survey_failure.text or "")
@@ -266,7 +274,7 @@ def test_a_bad_recording_in_a_batch(flights: Path, work: Path) -> None:
     code, out, err = cli("replay", str(batch), "--check", "--format", "junit", "--jobs", "2")
     assert code == 2
     assert "b.mcap: error: " in one_error_line(err)
-    suite = ET.fromstring(out)
+    (suite,) = ET.fromstring(out).findall("testsuite")
     assert (suite.get("tests"), suite.get("failures"), suite.get("errors")) == ("2", "0", "1")
     good, bad = suite.findall("testcase")
     assert good.find("error") is None

@@ -22,7 +22,13 @@ from aeroexec.cli.options import (
     timeout_option,
     use_color,
 )
-from aeroexec.cli.project import BehaviorsOption, catalog_path, project, project_behaviors
+from aeroexec.cli.project import (
+    BehaviorsOption,
+    DisablePluginOption,
+    catalog_path,
+    project,
+    project_behaviors,
+)
 from aeroexec.cli.tables import print_table
 from aeroexec.plugins import Implementation
 
@@ -34,8 +40,10 @@ class OutputFormat(str, Enum):
 
 def _source(implementation: Implementation) -> str:
     origin = f" ({implementation.origin})" if not implementation.standard else ""
-    overrides = ", replaces the standard library's" if implementation.overrides else ""
-    return f"{implementation.source}{origin}{overrides}"
+    replaced = [f"installed {implementation.shadows.origin}"] if implementation.shadows else []
+    replaced += ["the standard library's"] if implementation.overrides else []
+    replaces = f", replaces {' and '.join(replaced)}" if replaced else ""
+    return f"{implementation.source}{origin}{replaces}"
 
 
 def _as_dict(implementation: Implementation, in_catalog: bool) -> dict[str, Any]:
@@ -48,6 +56,9 @@ def _as_dict(implementation: Implementation, in_catalog: bool) -> dict[str, Any]
         "source": implementation.source,
         "origin": implementation.origin,
         "overrides_standard": implementation.overrides,
+        "replaces_plugin": (
+            implementation.shadows.reference if implementation.shadows is not None else None
+        ),
         "in_catalog": in_catalog,
         "argument_names": (
             list(implementation.cls.argument_names)
@@ -68,6 +79,7 @@ def behaviors_command(
         "Stop importing -b/--behaviors (and the project's) when it has run this long in "
         "wall-clock time: an error at its file:line, exit 2. Default: no limit."
     ),
+    disable_plugin: DisablePluginOption = None,
     output_format: OutputFormat = format_option(
         OutputFormat, "text (a table) or json (every field, for machines)."
     ),
@@ -87,7 +99,7 @@ def behaviors_command(
     """
     apply_timeout(timeout)
     settings = project()
-    found = project_behaviors(behaviors, settings)
+    found = project_behaviors(behaviors, settings, disable_plugin)
     chosen = catalog_path(catalog, settings, DEFAULT_CATALOG)
     loaded = load_catalog(chosen)
     missing = found.missing(loaded)

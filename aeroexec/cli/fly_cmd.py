@@ -29,6 +29,7 @@ from aeroexec.cli.options import (
 from aeroexec.cli.project import (
     AllowUnimplementedOption,
     BehaviorsOption,
+    DisablePluginOption,
     catalog_path,
     first,
     project,
@@ -144,6 +145,7 @@ def fly_command(
         "stops yielding: a loop, a sleep): it fails at its file:line, exit 1; also limits "
         "importing -b/--behaviors (exit 2). Default: no limit; 0: none."
     ),
+    disable_plugin: DisablePluginOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
@@ -183,7 +185,7 @@ def fly_command(
         signing_key=signing_key,
         allow_remote=allow_remote,
         connect_timeout=connect_timeout,
-        behaviors=project_behaviors(behaviors, settings),
+        behaviors=project_behaviors(behaviors, settings, disable_plugin),
         allow_unimplemented=allow_unimplemented,
         baud=baud,
     )

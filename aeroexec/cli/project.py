@@ -13,8 +13,15 @@ from typing import Annotated, TypeVar
 
 import typer
 
+from aeroexec.cli.app import say
 from aeroexec.config import ProjectConfig, load_config
-from aeroexec.plugins import BehaviorSet, BehaviorSources, discover, sources_for
+from aeroexec.plugins import (
+    DISABLE_AUTOLOAD,
+    BehaviorSet,
+    BehaviorSources,
+    discover,
+    sources_for,
+)
 
 BehaviorsOption = Annotated[
     list[str] | None,
@@ -23,8 +30,20 @@ BehaviorsOption = Annotated[
         "-b",
         metavar="MODULE_OR_FILE",
         help="Your behaviors: a module, a package or a .py file (repeatable); added to the "
-        "project's [tool.aeroexec] behaviors, installed 'aeroexec.behaviors' entry points "
-        "and the standard library.",
+        "project's [tool.aeroexec] behaviors, before installed plugins ('aeroexec.behaviors' "
+        "entry points) and the standard library, whose behaviors of the same name they "
+        "replace.",
+        show_default=False,
+    ),
+]
+
+DisablePluginOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--disable-plugin",
+        metavar="NAME",
+        help="Do not load this installed plugin (its distribution name, as pip lists it; "
+        f"repeatable); {DISABLE_AUTOLOAD}=1 loads none.",
         show_default=False,
     ),
 ]
@@ -46,14 +65,27 @@ def project() -> ProjectConfig:
     return load_config()
 
 
-def behavior_sources(behaviors: list[str] | None, config: ProjectConfig) -> BehaviorSources:
-    return sources_for(behaviors or (), config)
+def behavior_sources(
+    behaviors: list[str] | None, config: ProjectConfig, disabled: list[str] | None = None
+) -> BehaviorSources:
+    return sources_for(behaviors or (), config, disabled or ())
 
 
-def project_behaviors(behaviors: list[str] | None, config: ProjectConfig) -> BehaviorSet:
-    """Every behavior the command line, the project and the installed packages provide,
+def discovered_behaviors(sources: BehaviorSources) -> BehaviorSet:
+    """`discover(sources)`, with a note on stderr for each installed plugin's behavior
+    that the project's own replaces."""
+    found = discover(sources)
+    for note in found.notes():
+        say("note", note)
+    return found
+
+
+def project_behaviors(
+    behaviors: list[str] | None, config: ProjectConfig, disabled: list[str] | None = None
+) -> BehaviorSet:
+    """Every behavior the command line, the project and the installed plugins provide,
     then the standard library (`BehaviorError`, one line, for a bad one)."""
-    return discover(behavior_sources(behaviors, config))
+    return discovered_behaviors(behavior_sources(behaviors, config, disabled))
 
 
 def first(given: T | None, configured: T | None, default: T) -> T:

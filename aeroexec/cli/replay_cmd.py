@@ -27,10 +27,15 @@ from aeroexec.cli.options import (
     replaced,
     timeout_option,
 )
-from aeroexec.cli.project import BehaviorsOption, behavior_sources, project
+from aeroexec.cli.project import (
+    BehaviorsOption,
+    DisablePluginOption,
+    behavior_sources,
+    discovered_behaviors,
+    project,
+)
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
-from aeroexec.plugins import discover
 from aeroexec.progress import ProgressFactory, progress_bar
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
@@ -174,6 +179,7 @@ def replay(
         "one that stops yielding: a loop, a sleep): it fails at its file:line, exit 1; "
         "also limits importing -b/--behaviors (exit 2). Default: no limit; 0: none."
     ),
+    disable_plugin: DisablePluginOption = None,
     shard: Annotated[
         str | None,
         typer.Option(
@@ -245,8 +251,8 @@ def replay(
     started = time.perf_counter()
     if catalog is not None:
         load_catalog(catalog)  # a bad catalog is one error, not one per recording
-    sources = behavior_sources(behaviors, project())
-    discover(sources)  # so are bad behaviors (and the replays reuse what was found)
+    sources = behavior_sources(behaviors, project(), disable_plugin)
+    discovered_behaviors(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
     options = ReplayOptions(

@@ -29,6 +29,7 @@ from aeroexec.cli.options import (
 from aeroexec.cli.project import (
     AllowUnimplementedOption,
     BehaviorsOption,
+    DisablePluginOption,
     catalog_path,
     first,
     project,
@@ -129,6 +130,7 @@ def run(
         "stops yielding: a loop, a sleep): it fails at its file:line, exit 1; also limits "
         "importing -b/--behaviors (exit 2). Default: no limit; 0: none."
     ),
+    disable_plugin: DisablePluginOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
     max_sim_time: float = typer.Option(
         DEFAULT_MAX_SIM_TIME_S,
@@ -169,7 +171,7 @@ def run(
         seed=first(seed, settings.seed, 0),
         world=first(world, settings.world, None),
         record=output,
-        behaviors=project_behaviors(behaviors, settings),
+        behaviors=project_behaviors(behaviors, settings, disable_plugin),
         allow_unimplemented=allow_unimplemented,
         max_sim_time_s=max_sim_time or None,
     )

@@ -20,7 +20,13 @@ from aeroexec.cli.options import (
     use_color,
     world_option,
 )
-from aeroexec.cli.project import BehaviorsOption, first, project, project_behaviors
+from aeroexec.cli.project import (
+    BehaviorsOption,
+    DisablePluginOption,
+    first,
+    project,
+    project_behaviors,
+)
 from aeroexec.errors import AeroexecError
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
@@ -129,6 +135,7 @@ def verify_command(
         "Stop importing -b/--behaviors (and the project's) when it has run this long in "
         "wall-clock time: an error at its file:line, exit 2. Default: no limit."
     ),
+    disable_plugin: DisablePluginOption = None,
 ) -> None:
     if explain is not None:
         rule = get(explain)
@@ -150,7 +157,7 @@ def verify_command(
         catalogs = [str(settings.catalog)]
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
-    found = project_behaviors(behaviors, settings)
+    found = project_behaviors(behaviors, settings, disable_plugin)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
     report = verify(catalogs, mission, world=limits, behaviors=found if found.declared else None)

@@ -14,11 +14,13 @@ Python 2 prints:
   `add_belief(belief)`, `remove_belief(belief)` -> bool.
 
 Every call is published on `mission/command` first: those are the session's external
-inputs, which replay feeds back.
+inputs, which replay feeds back. Each names the line of the mission script that made it
+(`line`, the innermost frame of the script's own code), so a report can point at it.
 """
 
 from __future__ import annotations
 
+import sys
 import types
 from collections.abc import Callable
 from typing import Any
@@ -31,12 +33,25 @@ from aeroexec.executive.messages import BehaviorEvent
 from aeroexec.interrupts import check as check_interrupts
 
 MODULE_NAME = "executive_engine_api"
+#: The `__name__` a mission script runs under (`script.run_script`).
+MISSION_NAMESPACE = "__aeroexec_mission__"
 REFUSED = "ERROR"
 #: How long `execute_behavior` waits for a behavior with no timeout (clock seconds).
 DEFAULT_WAIT_S = 3600.0
 
 
 Spelling = Callable[[str], str]
+
+
+def _mission_line() -> int:
+    """The line of the mission script's own code that is calling the API (0: none, as
+    for the recorded commands replay feeds back)."""
+    frame = sys._getframe(1)
+    while frame is not None:
+        if frame.f_globals.get("__name__") == MISSION_NAMESPACE:
+            return frame.f_lineno or 0
+        frame = frame.f_back  # type: ignore[assignment]
+    return 0
 
 
 def _snake(name: str) -> str:
@@ -66,7 +81,9 @@ class MissionAPI:
     def _command(self, command: str, **fields: Any) -> None:
         # A safe point too: a mission polling beliefs in a loop never steps the clock.
         check_interrupts()
-        self.executive.bus.publish("mission/command", {"command": command, **fields})
+        line = _mission_line()
+        where = {"line": line} if line else {}
+        self.executive.bus.publish("mission/command", {"command": command, **fields, **where})
 
     # -- behaviors -----------------------------------------------------------------------
     def execute_behavior(self, name: str, **arguments: Any) -> str:

@@ -24,7 +24,7 @@ from aeroexec.executive.executive import TimeLimitReached
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import TimedOut, deadline, user_code
 from aeroexec.interrupts import handling as handling_signals
-from aeroexec.mission.api import MODULE_NAME, MissionAPI
+from aeroexec.mission.api import MISSION_NAMESPACE, MODULE_NAME, MissionAPI
 
 ENTRY_POINTS = ("runMission", "run_mission", "main")
 
@@ -102,7 +102,7 @@ def run_script(
     not ended by exiting the process (a live flight must get its ending).
     """
     until = deadline(time_limit_s)
-    namespace: dict[str, Any] = {"__name__": "__aeroexec_mission__", "__file__": script.path}
+    namespace: dict[str, Any] = {"__name__": MISSION_NAMESPACE, "__file__": script.path}
     previous = sys.modules.get(MODULE_NAME)
     sys.modules[MODULE_NAME] = api.as_module()
     try:

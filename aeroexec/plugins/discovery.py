@@ -2,12 +2,28 @@
 
 1. `--behaviors MODULE_OR_FILE` on the command line (repeatable);
 2. `behaviors = [...]` in the project configuration (`[tool.aeroexec]` / aeroexec.toml);
-3. installed packages' entry points in the group `aeroexec.behaviors`;
+3. installed packages' entry points in the group `aeroexec.behaviors` (the plugins);
 4. aeroexec's standard library, last.
 
-A behavior from the first three sources replaces the standard library's behavior of the
-same name; two of them implementing the same name is an error naming both (nothing
-decides silently which one flies). What a module provides: the `Behavior` subclasses in
+The order is a precedence between levels: the project's own behaviors (1 and 2) replace
+an installed plugin's of the same name, and both replace the standard library's. The
+replaced plugin is still imported (which behaviors it has is only known then); its class
+of that name does not run, and the command says so in a note (`BehaviorSet.notes`).
+Within one level two implementations of one name are an error naming both: `--behaviors`
+and the configuration are both the project's own, and two installed plugins have no order
+between them, so nothing decides silently which one flies.
+
+Plugins load automatically, as pytest's do, and can be turned off the same two ways:
+all of them with the environment variable `AEROEXEC_DISABLE_PLUGIN_AUTOLOAD=1` (a
+project can still name a plugin's module with `--behaviors`), or one distribution with
+`--disable-plugin NAME` / the configuration's `disable_plugins`. A disabled plugin is
+never imported. One that fails to import is an error, not a warning, even when the
+mission may not use it: which behaviors it provides is only known once it has imported,
+so it may have been the code meant to replace a standard behavior, and flying the
+standard one instead (or recording it as what ran) would be the surprise this module
+exists to prevent. The error names the distribution and how to turn it off.
+
+What a module provides: the `Behavior` subclasses in
 its namespace with a `name` (only those in `__all__` when it has one), leaving out
 aeroexec's own classes that it merely imported; a package without `__all__` also provides
 those of its public submodules (imported in name order). An entry point names a module
@@ -20,10 +36,13 @@ a replay worker process can discover the same set again.
 from __future__ import annotations
 
 import inspect
+import os
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 from aeroexec.catalog.model import Catalog
 from aeroexec.config import key_mark
@@ -32,7 +51,13 @@ from aeroexec.errors import BehaviorError, Mark
 from aeroexec.executive.behavior import Behavior, GenericBehavior
 from aeroexec.plugins.loading import Importer, Named, class_mark, failure_in_user_code
 
+if TYPE_CHECKING:
+    from importlib.metadata import EntryPoint
+
 ENTRY_POINT_GROUP = "aeroexec.behaviors"
+#: Set (to anything but "" or "0") to load no plugin automatically, as pytest's
+#: PYTEST_DISABLE_PLUGIN_AUTOLOAD.
+DISABLE_AUTOLOAD = "AEROEXEC_DISABLE_PLUGIN_AUTOLOAD"
 STANDARD = "standard library"
 COMMAND_LINE = "--behaviors"
 #: What an implementation that only stands in for a missing one is recorded as.
@@ -54,7 +79,23 @@ class BehaviorSources:
     config: tuple[str, ...] | None = None
     config_file: str | None = None
     config_label: str = ""
+    #: Load installed plugins (entry points) at all (`autoload_enabled()`), and when not,
+    #: why not (for messages: "AEROEXEC_DISABLE_PLUGIN_AUTOLOAD is set").
     entry_points: bool = True
+    entry_points_off: str = ""
+    #: Installed plugins not to load: distribution names (or entry point names).
+    disabled_plugins: tuple[str, ...] = ()
+
+
+def autoload_enabled(environ: Mapping[str, str] | None = None) -> bool:
+    """False when `AEROEXEC_DISABLE_PLUGIN_AUTOLOAD` is set to anything but "" or "0"."""
+    value = (os.environ if environ is None else environ).get(DISABLE_AUTOLOAD, "")
+    return value.strip() in ("", "0")
+
+
+def plugin_key(name: str) -> str:
+    """A distribution name as pip compares them (PEP 503): `Drone_Tricks` is `drone-tricks`."""
+    return re.sub(r"[-_.]+", "-", name).lower()
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +110,8 @@ class Implementation:
     origin: str
     #: True when it replaces the standard library's implementation of the same name.
     overrides: bool = False
+    #: The installed plugin's implementation it replaces (the project's own only).
+    shadows: Implementation | None = None
 
     @property
     def reference(self) -> str:
@@ -133,6 +176,16 @@ class BehaviorSet:
             implementations[name] = Implementation(name, STAND_IN, "stand-in", "")
         return BehaviorSet(implementations, self.searched, self.declared, (*self.stand_ins, *names))
 
+    def notes(self) -> tuple[str, ...]:
+        """What a command says on stderr: each installed plugin's behavior that the
+        project's own replaces."""
+        return tuple(
+            f"{i.name}: {_describe(i.cls, i.source, i.origin)} replaces the installed "
+            f"plugin's {i.shadows.reference} (from {i.shadows.origin})"
+            for i in self.implementations.values()
+            if i.shadows is not None
+        )
+
     def user(self) -> tuple[Implementation, ...]:
         """The implementations that are not aeroexec's own (nor stand-ins)."""
         return tuple(i for i in self.implementations.values() if not i.standard and not i.stand_in)
@@ -155,9 +208,14 @@ def standard_set() -> BehaviorSet:
 
 # -- discovery ---------------------------------------------------------------------------
 class _Collector:
-    def __init__(self) -> None:
+    """One level of the order: two implementations of one name in it are an error."""
+
+    def __init__(
+        self, remedy: str = "keep one (or list the one you mean in the module's __all__)"
+    ) -> None:
         self.found: dict[str, Implementation] = {}
         self.searched: list[str] = []
+        self.remedy = remedy
 
     def add(self, cls: type[Behavior], source: str, origin: str) -> None:
         previous = self.found.get(cls.name)
@@ -167,7 +225,7 @@ class _Collector:
             raise BehaviorError(
                 f"behavior {cls.name} is implemented twice: {_describe(cls, source, origin)} "
                 f"and {_describe(previous.cls, previous.source, previous.origin)}; "
-                "keep one (or list the one you mean in the module's __all__)",
+                f"{self.remedy}",
                 class_mark(cls),
             )
         self.found[cls.name] = Implementation(cls.name, cls, source, origin)
@@ -202,20 +260,37 @@ def discover(sources: BehaviorSources) -> BehaviorSet:
                 collector.add(cls, shown(config_file), spec)
         listed = ", ".join(sources.config) if sources.config else "none"
         collector.searched.append(f"{sources.config_label} behaviors ({listed})")
+    implementations = dict(collector.found)
     if sources.entry_points:
-        count = _entry_points(collector)
-        declared = declared or count > 0
+        installed = _Collector(
+            "two installed plugins have no order between them: turn one off with "
+            "--disable-plugin NAME"
+        )
+        count, disabled = _entry_points(installed, sources.disabled_plugins)
+        declared = declared or count > disabled
+        for name, plugin in installed.found.items():
+            own = implementations.get(name)
+            if own is None:
+                implementations[name] = plugin
+            else:
+                implementations[name] = Implementation(
+                    name, own.cls, own.source, own.origin, shadows=plugin
+                )
+        off = f", {disabled} turned off" if disabled else ""
         collector.searched.append(
-            f"entry points '{ENTRY_POINT_GROUP}' ({count} installed)"
-            if count
+            f"entry points '{ENTRY_POINT_GROUP}' ({count} installed{off})"
+            if count or disabled
             else f"entry points '{ENTRY_POINT_GROUP}' (none installed)"
         )
-    implementations = dict(collector.found)
+    elif sources.entry_points_off:
+        collector.searched.append(
+            f"entry points '{ENTRY_POINT_GROUP}' (not loaded: {sources.entry_points_off})"
+        )
     for name, standard in _standard().items():
         if name in implementations:
             user = implementations[name]
             implementations[name] = Implementation(
-                name, user.cls, user.source, user.origin, overrides=True
+                name, user.cls, user.source, user.origin, overrides=True, shadows=user.shadows
             )
         else:
             implementations[name] = standard
@@ -298,38 +373,101 @@ def _module_mark(module: ModuleType) -> Mark:
     return Mark(shown(file)) if file else Mark(module.__name__)
 
 
-def _entry_points(collector: _Collector) -> int:
+def _entry_points(collector: _Collector, disabled: Iterable[str]) -> tuple[int, int]:
+    """Load every installed plugin's entry points into `collector`, but those of the
+    `disabled` distributions (or entry point names): (how many are installed, how many
+    of them were turned off)."""
     from importlib.metadata import entry_points
 
+    off = {plugin_key(name) for name in disabled}
     points = sorted(
         entry_points(group=ENTRY_POINT_GROUP),
         key=lambda ep: (getattr(ep.dist, "name", "") or "", ep.name, ep.value),
     )
+    loaded = 0
     for point in points:
+        plugin = _Plugin(point)
+        if plugin.key in off or plugin_key(point.name) in off:
+            continue
+        loaded += 1
+        for cls in plugin.behaviors():
+            collector.add(cls, "entry point", plugin.label)
+    return len(points), len(points) - loaded
+
+
+class _Plugin:
+    """One installed entry point, and how its errors name it: by its distribution, once,
+    with how to turn it off."""
+
+    def __init__(self, point: EntryPoint) -> None:
+        self.point = point
         dist = point.dist
-        label = f"{point.name} = {point.value}" + (
+        self.name = dist.name if dist is not None else point.name
+        self.key = plugin_key(self.name)
+        self.label = f"{point.name} = {point.value}" + (
             f" ({dist.name} {dist.version})" if dist is not None else ""
         )
-        where = Mark(f"entry point {label}")
+        version = f" {dist.version}" if dist is not None else ""
+        self.what = (
+            f"installed plugin {self.name}{version} (entry point {point.name} = {point.value})"
+        )
+
+    def behaviors(self) -> list[type[Behavior]]:
         try:
-            loaded = point.load()
+            return self._behaviors()
+        except BehaviorError as exc:
+            named = exc.message.startswith(self.what)
+            message = exc.message if named else f"{self.what}: {exc.message}"
+            raise BehaviorError(f"{message}; {self.remedy}", exc.mark) from None
+
+    @property
+    def remedy(self) -> str:
+        return (
+            f"turn it off with --disable-plugin {self.name} (or every installed plugin with "
+            f"{DISABLE_AUTOLOAD}=1)"
+        )
+
+    def _behaviors(self) -> list[type[Behavior]]:
+        declared_at = self._declared_at()
+        try:
+            loaded = self.point.load()
         except SyntaxError as exc:
-            mark = Mark(shown(exc.filename or where.file), exc.lineno or 0, exc.offset or 0)
-            raise BehaviorError(f"invalid Python: {exc.msg}", mark) from None
-        except Exception as exc:
-            raise failure_in_user_code(exc, f"loading entry point {label} failed", where) from None
-        if isinstance(loaded, ModuleType):
-            classes = behaviors_in(loaded)
-        elif inspect.isclass(loaded) and issubclass(loaded, Behavior) and loaded.name:
-            classes = [loaded]
-        else:
-            what = type(loaded).__name__ if not inspect.isclass(loaded) else loaded.__qualname__
-            raise BehaviorError(
-                f"entry point {label} names {what}, not a module or a Behavior subclass", where
+            mark = (
+                Mark(shown(exc.filename), exc.lineno or 0, exc.offset or 0)
+                if exc.filename
+                else declared_at
             )
-        for cls in classes:
-            collector.add(cls, "entry point", label)
-    return len(points)
+            raise BehaviorError(f"{self.what} is not valid Python: {exc.msg}", mark) from None
+        except Exception as exc:
+            raise failure_in_user_code(exc, f"{self.what} failed to load", declared_at) from None
+        if isinstance(loaded, ModuleType):
+            return behaviors_in(loaded)
+        if inspect.isclass(loaded) and issubclass(loaded, Behavior) and loaded.name:
+            return [loaded]
+        what = type(loaded).__name__ if not inspect.isclass(loaded) else loaded.__qualname__
+        raise BehaviorError(
+            f"{self.what} names {what}, not a module or a Behavior subclass", declared_at
+        )
+
+    def _declared_at(self) -> Mark | None:
+        """The line of the distribution's entry_points.txt that declares it, when the
+        distribution is a directory on disk (a wheel's .dist-info, an egg-info)."""
+        where = getattr(self.point.dist, "_path", None)  # PathDistribution's directory
+        if not isinstance(where, Path):
+            return None
+        path = where / "entry_points.txt"
+        try:
+            lines = path.read_text(encoding="utf-8").splitlines()
+        except (OSError, UnicodeDecodeError):
+            return None
+        group = ""
+        for number, line in enumerate(lines, 1):
+            text = line.strip()
+            if text.startswith("["):
+                group = text.strip("[]").strip()
+            elif group == ENTRY_POINT_GROUP and text.partition("=")[0].strip() == self.point.name:
+                return Mark(shown(path), number, line.index(text) + 1)
+        return Mark(shown(path))
 
 
 #: The last set discovered for each sources value, in this process.
@@ -344,12 +482,15 @@ def discovered(sources: BehaviorSources) -> BehaviorSet:
 
 
 __all__ = [
+    "DISABLE_AUTOLOAD",
     "ENTRY_POINT_GROUP",
     "BehaviorSet",
     "BehaviorSources",
     "Implementation",
+    "autoload_enabled",
     "behaviors_in",
     "discover",
     "discovered",
+    "plugin_key",
     "standard_set",
 ]

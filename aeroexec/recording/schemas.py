@@ -192,6 +192,8 @@ SCHEMAS: dict[str, dict[str, Any]] = {
             "arguments": _FREE_OBJECT,
             "query": {"type": "string"},
             "belief": {"type": "string"},
+            # The mission script's line that made the call (absent when not known).
+            "line": {"type": "integer", "minimum": 1},
             # Imported from a bag: the command was inferred from the active list, and how.
             "reconstructed": {"type": "boolean"},
             "evidence": {"type": "string"},

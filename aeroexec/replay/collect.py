@@ -65,6 +65,7 @@ class _Command:
         "end_ns",
         "error",
         "index",
+        "line",
         "preempted",
         "processes",
         "situation",
@@ -83,6 +84,10 @@ class _Command:
         self.arguments = dict(arguments) if isinstance(arguments, dict) else {}
         text = data.get("query", data.get("belief"))
         self.text = text if isinstance(text, str) else ""
+        line = data.get("line")
+        self.line = (
+            line if isinstance(line, int) and not isinstance(line, bool) and line > 0 else None
+        )
         self.accepted: bool | None = None
         self.error = ""
         self.uid: int | None = None
@@ -150,6 +155,7 @@ class _Interner:
             end_code=command.end_code,
             end_ns=command.end_ns,
             end_detail=self.text(command.end_detail),
+            line=command.line,
         )
 
 

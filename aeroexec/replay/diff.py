@@ -74,6 +74,9 @@ class Difference:
     label: str = ""
     base_index: int | None = None
     new_index: int | None = None
+    #: The line of the mission script (`DiffResult.mission`) that made the command, when
+    #: known.
+    line: int | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -83,6 +86,7 @@ class Difference:
             "message": self.message,
             "base_index": self.base_index,
             "new_index": self.new_index,
+            "line": self.line,
         }
 
 
@@ -95,10 +99,17 @@ class DiffResult:
     compared: int
     tolerance: Tolerance
     notes: tuple[str, ...] = ()
+    #: The mission script the differences' lines are in ("" when unknown).
+    mission: str = ""
 
     @property
     def equal(self) -> bool:
         return not self.differences
+
+    @property
+    def first_line(self) -> int | None:
+        """The mission line of the first difference that has one (for CI annotations)."""
+        return next((d.line for d in self.differences if d.line is not None), None)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -109,6 +120,7 @@ class DiffResult:
             "tolerance": {"time_s": self.tolerance.time_s, "position_m": self.tolerance.position_m},
             "differences": [d.as_dict() for d in self.differences],
             "notes": list(self.notes),
+            "mission": self.mission or None,
         }
 
 
@@ -121,9 +133,16 @@ def diff_outcomes(
     new_name: str | None = None,
     compare_state: bool = True,
     notes: tuple[str, ...] = (),
+    mission: str = "",
+    base_lines: bool = False,
 ) -> DiffResult:
     """What changed from `base` to `new`. `compare_state=False` skips the final vehicle
-    state (open-loop replay feeds the recorded state, so it cannot differ)."""
+    state (open-loop replay feeds the recorded state, so it cannot differ).
+
+    `mission`: the script `new`'s command lines are lines of ("": unknown, no lines);
+    `base_lines`: `base`'s are lines of it too (a replay of the recorded commands, or of
+    the recorded script)."""
+    lines = _Lines(bool(mission), base_lines)
     tol = tolerance or Tolerance()
     names = (base_name or base.source, new_name or new.source)
     out: list[Difference] = []
@@ -136,12 +155,16 @@ def diff_outcomes(
         if tag == "equal":
             for old, cur in zip(base.commands[i1:i2], new.commands[j1:j2], strict=True):
                 matched += 1
-                out.extend(_command(old, cur, tol, compared))
+                out.extend(_command(old, cur, tol, compared, lines.of(old, cur)))
             continue
         for old in base.commands[i1:i2]:
-            out.append(_only(old, "only_in_base", names[0], base_index=old.index))
+            out.append(
+                _only(old, "only_in_base", names[0], lines.of(old, None), base_index=old.index)
+            )
         for cur in new.commands[j1:j2]:
-            out.append(_only(cur, "only_in_new", names[1], new_index=cur.index))
+            out.append(
+                _only(cur, "only_in_new", names[1], lines.of(None, cur), new_index=cur.index)
+            )
     if compare_state:
         state = _final_state(base.final_state, new.final_state, tol)
         if state is not None:
@@ -152,7 +175,22 @@ def diff_outcomes(
         all_notes.append(f"{missing.source} records no {kind} transitions: {kind} not compared")
     for run in (base, new):
         all_notes.extend(f"{run.source}: {note}" for note in run.notes)
-    return DiffResult(names[0], names[1], tuple(out), matched, tol, tuple(all_notes))
+    return DiffResult(names[0], names[1], tuple(out), matched, tol, tuple(all_notes), mission)
+
+
+class _Lines:
+    """Which run's command lines are lines of the mission script a report points at."""
+
+    def __init__(self, new: bool, base: bool) -> None:
+        self.new = new
+        self.base = new and base
+
+    def of(self, old: CommandOutcome | None, cur: CommandOutcome | None) -> int | None:
+        if self.new and cur is not None and cur.line is not None:
+            return cur.line
+        if self.base and old is not None:
+            return old.line
+        return None
 
 
 def align(
@@ -175,13 +213,19 @@ def align(
 
 # -- one command ----------------------------------------------------------------------------
 def _command(
-    old: CommandOutcome, cur: CommandOutcome, tol: Tolerance, compared: frozenset[str]
+    old: CommandOutcome,
+    cur: CommandOutcome,
+    tol: Tolerance,
+    compared: frozenset[str],
+    line: int | None,
 ) -> list[Difference]:
     out: list[Difference] = []
     label = old.label
 
     def add(kind: str, text: str) -> None:
-        out.append(Difference(kind, f"{label} {text}", old.index, label, old.index, cur.index))
+        out.append(
+            Difference(kind, f"{label} {text}", old.index, label, old.index, cur.index, line)
+        )
 
     if old.arguments != cur.arguments:
         add(
@@ -223,12 +267,15 @@ def _command(
     return out
 
 
-def _only(command: CommandOutcome, kind: str, where: str, **index: int) -> Difference:
+def _only(
+    command: CommandOutcome, kind: str, where: str, line: int | None, **index: int
+) -> Difference:
     return Difference(
         kind,
         f"{command.label} only in {where}: the mission took another path",
         command.index,
         command.label,
+        line=line,
         **index,
     )
 

@@ -98,6 +98,7 @@ class ReplayResult:
             "differences": [d.as_dict() for d in self.diff.differences] if self.diff else [],
             "code_changes": list(self.code_changes),
             "notes": list(self.notes),
+            "mission": self.diff.mission or None if self.diff else None,
         }
 
 
@@ -188,6 +189,7 @@ def replay_recording(
         notes.append("the recording does not say which behavior code ran: code changes unknown")
     if behaviors.stand_ins:
         notes.append(f"stand-ins, as in the recording: {', '.join(behaviors.stand_ins)}")
+    lines_of = _mission_lines(run, options, mode)
     diff = diff_outcomes(
         run.outcome,
         replayed,
@@ -195,6 +197,8 @@ def replay_recording(
         base_name="the recording",
         new_name="the replay",
         compare_state=mode is Mode.closed,
+        mission=lines_of[0],
+        base_lines=lines_of[1],
     )
     notes.extend(diff.notes)
     return ReplayResult(
@@ -241,6 +245,15 @@ def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayRe
             "active-behavior list (bags hold no service calls)"
         )
     return replace(result, recording=str(path), notes=(*result.notes, *notes))
+
+
+def _mission_lines(run: RecordedRun, options: ReplayOptions, mode: Mode) -> tuple[str, bool]:
+    """Which script the replay's command lines are lines of: the user's (`--mission`),
+    else the recorded one (whose lines the recording's commands carry, and a replay of
+    them or of its script carries again). A replay of a replay names no script."""
+    if mode is Mode.closed and options.mission is not None:
+        return str(options.mission), False
+    return _script(run), True
 
 
 def choose_behaviors(
@@ -319,4 +332,12 @@ def diff_recordings(
         base_name=str(base),
         new_name=str(new),
         notes=notes,
+        mission=_script(runs[1]),
+        base_lines=_script(runs[0]) == _script(runs[1]),
     )
+
+
+def _script(run: RecordedRun) -> str:
+    """The mission script a recording's command lines are lines of ("" if none)."""
+    recorded = run.metadata.get("mission") or ""
+    return "" if recorded.startswith("(") else recorded  # "(mission/command stream)"

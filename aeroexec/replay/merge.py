@@ -60,11 +60,17 @@ def result_from_dict(data: dict[str, Any], tolerance: Tolerance) -> ReplayResult
                 label=str(d["label"]),
                 base_index=d["base_index"],
                 new_index=d["new_index"],
+                line=d.get("line"),
             )
             for d in data["differences"]
         )
         diff = DiffResult(
-            BASE_NAME, NEW_NAME, differences, int(data["compared_commands"]), tolerance
+            BASE_NAME,
+            NEW_NAME,
+            differences,
+            int(data["compared_commands"]),
+            tolerance,
+            mission=str(data.get("mission") or ""),
         )
     return ReplayResult(
         recording=str(data["recording"]),

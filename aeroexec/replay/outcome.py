@@ -62,6 +62,9 @@ class CommandOutcome:
     end_code: str | None = None
     end_ns: int | None = None
     end_detail: str = ""
+    #: The mission script's line that made the command (None: not recorded). Where it
+    #: came from, not what happened: never compared.
+    line: int | None = field(default=None, compare=False)
 
     @property
     def key(self) -> tuple[str, str]:

@@ -36,6 +36,8 @@ def command_message(command: CommandOutcome) -> dict[str, Any]:
         data["query"] = command.text
     elif command.command in ("add_belief", "remove_belief"):
         data["belief"] = command.text
+    if command.line is not None:  # the recorded script's line, for reports
+        data["line"] = command.line
     return data
 
 

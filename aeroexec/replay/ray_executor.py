@@ -20,8 +20,9 @@ module only submits, collects and says what happened:
   not with whatever aeroexec its image has; its other dependencies must be installed
   there. A probe task checks that before any recording is submitted.
 
-Ray is an optional dependency (`pip install "aeroexec[ray]"`); this is the only module
-that imports it, and only `--executor ray...` imports this module.
+Ray is an optional dependency (`pip install "aeroexec[ray]"`); this module and
+`ray_client_check` (why a `ray://` connection fails) are the only ones that import it,
+and only `--executor ray...` imports them.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ import ray.exceptions
 import aeroexec
 from aeroexec.errors import AeroexecError
 from aeroexec.interrupts import check
+from aeroexec.replay import ray_client_check
 from aeroexec.replay.engine import ReplayResult
 from aeroexec.replay.tasks import (
     Completed,
@@ -112,8 +114,14 @@ class RayExecutor:
             self._owned = False
 
     def _connect(self) -> None:
+        where = self.address or "this machine"
+        client = self.address is not None and self.address.startswith("ray://")
+        if client:
+            problem = ray_client_check.problem(str(self.address))
+            if problem is not None:
+                raise AeroexecError(f"cannot reach Ray on {where}: {problem}")
         try:
-            if self.address is not None and self.address.startswith("ray://"):
+            if client:
                 package = str(Path(aeroexec.__file__).parent)
                 ray.init(address=self.address, runtime_env={"py_modules": [package]})
             else:
@@ -127,8 +135,11 @@ class RayExecutor:
                     logging_level=logging.WARNING,
                 )
         except Exception as exc:  # ConnectionError, a bad address, a version mismatch...
-            where = self.address or "this machine"
-            raise AeroexecError(f"cannot start or reach Ray on {where}: {exc}") from None
+            message = str(exc)
+            why = ray_client_check.hint(message) if client else ""
+            raise AeroexecError(
+                f"cannot start or reach Ray on {where}: {_first_line(exc)}{why}"
+            ) from None
         self._owned = True
 
     def _check_workers(self) -> None:

@@ -5,14 +5,17 @@ difference saying which command, what changed and why. JSON is one object with `
 and `differences` (flattened, each naming its recording); nothing in it depends on
 timing, so the same results always render the same bytes.
 
-JUnit XML is one testsuite with one testcase per recording (replay) or one for the pair
-(diff); differences are a `<failure>`, an unreadable recording an `<error>`. Each
-testcase names its recording in `file` (test-report actions on GitHub annotate that
-file, else they guess from `classname`) and its duration in `time`; the suite has the
-`timestamp` of the run (UTC) and its `time`. Those make two runs' reports differ, as
-JUnit reports do — unless `SOURCE_DATE_EPOCH` is set (the reproducible-builds
-convention): then the timestamp is that instant and every duration 0, so the same
-results render the same bytes again.
+JUnit XML is a `<testsuites>` root (what Jenkins, GitLab and GitHub's test-report actions
+all read) holding one testsuite, with one testcase per recording (replay) or one for the
+pair (diff); differences are a `<failure>`, an unreadable recording an `<error>`. Each
+testcase is named by its recording, and its `file` is the mission script whose commands
+were compared (the recording when no script is known) with, on a failure, the `line` of
+the command of the first difference: test-report actions annotate that line of the
+mission (a binary .mcap cannot be annotated). Each has its duration in `time`; the suite
+has the `timestamp` of the run (UTC) and its `time`, the root the suite's totals. Those
+make two runs' reports differ, as JUnit reports do — unless `SOURCE_DATE_EPOCH` is set
+(the reproducible-builds convention): then the timestamp is that instant and every
+duration 0, so the same results render the same bytes again.
 """
 
 from __future__ import annotations
@@ -151,7 +154,7 @@ def replay_junit(
     root = _suite(suite, len(results), timing, seconds)
     failures = errors = 0
     for result in results:
-        case = _case(root, "aeroexec.replay", result.recording, result.recording)
+        case = _case(root, "aeroexec.replay", result.recording, result.recording, result.diff)
         case.set("time", timing.duration(result.seconds))
         if result.diff is None:
             errors += 1
@@ -183,7 +186,7 @@ def diff_junit(
     """The pair as one testcase, attached to the NEW recording (the one judged)."""
     timing = timing or start_timing()
     root = _suite("aeroexec diff", 1, timing, seconds)
-    case = _case(root, "aeroexec.diff", f"{diff.base} -> {diff.new}", diff.new)
+    case = _case(root, "aeroexec.diff", f"{diff.base} -> {diff.new}", diff.new, diff)
     case.set("time", timing.duration(seconds))
     failures = 0
     if not diff.equal:
@@ -205,8 +208,17 @@ def _suite(name: str, tests: int, timing: Timing, seconds: float | None) -> ET.E
     )
 
 
-def _case(root: ET.Element, classname: str, name: str, file: str) -> ET.Element:
-    return ET.SubElement(root, "testcase", {"classname": classname, "name": name, "file": file})
+def _case(
+    root: ET.Element, classname: str, name: str, recording: str, diff: DiffResult | None
+) -> ET.Element:
+    """A testcase in `file` (the mission script when known, else the recording) at the
+    `line` of its first difference (when it has one)."""
+    attributes = {"classname": classname, "name": name}
+    attributes["file"] = diff.mission if diff is not None and diff.mission else recording
+    line = diff.first_line if diff is not None and diff.mission else None
+    if line is not None:
+        attributes["line"] = str(line)
+    return ET.SubElement(root, "testcase", attributes)
 
 
 def _failure(case: ET.Element, diff: DiffResult, notes: Sequence[str], header: str) -> None:
@@ -218,10 +230,18 @@ def _failure(case: ET.Element, diff: DiffResult, notes: Sequence[str], header: s
     failure.text = "\n".join([header, *_diff_lines(diff, notes)])
 
 
-def _finish(root: ET.Element, failures: int, errors: int) -> str:
-    root.set("failures", str(failures))
-    root.set("errors", str(errors))
-    root.set("skipped", "0")
+def _finish(suite: ET.Element, failures: int, errors: int) -> str:
+    suite.set("failures", str(failures))
+    suite.set("errors", str(errors))
+    suite.set("skipped", "0")
+    root = ET.Element(
+        "testsuites",
+        {
+            key: suite.get(key, "")
+            for key in ("name", "tests", "failures", "errors", "skipped", "time", "timestamp")
+        },
+    )
+    root.append(suite)
     ET.indent(root)
     body = ET.tostring(root, encoding="unicode")
     return f'<?xml version="1.0" encoding="UTF-8"?>\n{body}'
