@@ -13,9 +13,10 @@ and let `info` and `replay` take them directly. See docs/bags.md.
 
 from __future__ import annotations
 
-from aeroexec.bags.bagfile import BagConnection, BagFile, is_bag, open_bag
+from aeroexec.bags.bagfile import BagConnection, BagFile
 from aeroexec.bags.importer import ImportReport, import_bag
 from aeroexec.bags.mapping import Kind, Mapping, Rule, default_mapping_path, load_mapping
+from aeroexec.bags.source import is_bag, open_bag
 from aeroexec.bags.types import aerostack_typestore
 
 __all__ = [

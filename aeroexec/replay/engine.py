@@ -21,7 +21,7 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
-from aeroexec.bags.bagfile import is_bag
+from aeroexec.bags.source import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.mission.script import load_mission

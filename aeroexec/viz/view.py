@@ -83,7 +83,7 @@ class _Source:
 @contextmanager
 def _opened(path: Path) -> Iterator[_Source]:
     """The recording of `path`: itself, or for a ROS 1 bag a temporary import of it."""
-    from aeroexec.bags.bagfile import is_bag
+    from aeroexec.bags.source import is_bag
 
     if not is_bag(path):
         yield _Source(str(path), open_session(path))
