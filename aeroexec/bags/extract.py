@@ -298,7 +298,9 @@ def plain(value: object) -> Any:
         return {
             f.name: plain(getattr(value, f.name))
             for f in dataclasses.fields(value)
-            if not f.name.startswith("__")  # rosbags' __msgtype__
+            # rosbags' __msgtype__, and the constants (UPPER_CASE in ROS 2), which its
+            # generated classes list as fields too
+            if not f.name.startswith("__") and not f.name.isupper()
         }
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]

@@ -143,7 +143,7 @@ class Ros2Bag:
             except sqlite3.Error:  # schema before 4: no definitions at all
                 continue
             for type_name, text in rows:
-                if "/srv/" in type_name and text:
+                if ("/srv/" in type_name or "/action/" in type_name) and text:
                     texts.setdefault(type_name, text)
         return texts
 
@@ -153,9 +153,12 @@ class Ros2Bag:
         text = msgdef.data
         encoding = _FORMATS.get(msgdef.format, "")
         extra: list[tuple[str, str]] = []
-        is_event = "/srv/" in msgtype and msgtype.endswith("_Event")
+        is_event = msgtype.endswith("_Event") and ("/srv/" in msgtype or "/action/" in msgtype)
         if is_event and not text.strip():
-            text = services.get(msgtype[: -len("_Event")], "")
+            text = services.get(msgtype[: -len("_Event")], "") or services.get(
+                msgtype.rsplit("_", 2)[0],
+                "",  # an action's: <pkg>/action/<Name>
+            )
             encoding = "ros2msg" if text else ""
         if is_event and encoding == "ros2msg" and is_interface_text(text):
             try:

@@ -189,17 +189,24 @@ class Ros2Types:
             return None
 
     def service_event_definition(self, msgtype: str, srv_text: str) -> str:
-        """The real definition of `<pkg>/srv/<Name>_Event` from its `.srv` text (see the
-        module docstring). Raises `ValueError` with the reason."""
+        """The real definition of `<pkg>/srv/<Name>_Event` from its `.srv` text, or of an
+        action's `<pkg>/action/<Name>_SendGoal_Event` / `_GetResult_Event` from its
+        `.action` text (see the module docstring). Raises `ValueError` with the reason."""
         pkg = msgtype.split("/", 1)[0]
         name = msgtype.rsplit("/", 1)[-1]
         if not name.endswith("_Event"):
             raise ValueError(f"{msgtype} is not a service event type")
         sections = split_sections(srv_text.split("\n" + "=" * 80, 1)[0])
-        if len(sections) != 2:
+        service = name[: -len("_Event")]
+        action = service.rsplit("_", 1)[0]
+        if len(sections) == 3 and service.endswith(("_SendGoal", "_GetResult")):
+            make = lambda: interface_types("action", pkg, action, srv_text)  # noqa: E731
+        elif len(sections) == 2:
+            make = lambda: service_types(pkg, service, *sections)  # noqa: E731
+        else:
             raise ValueError(f"{msgtype}: the service text has {len(sections) - 1} '---' lines")
         try:
-            types = service_types(pkg, name[: -len("_Event")], *sections)
+            types = make()
             for type_name in types:
                 self.store.fielddefs.pop(type_name, None)
             self.store.register(types)
