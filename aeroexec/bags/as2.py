@@ -18,7 +18,10 @@ docs/bags.md):
   without a terminal status (the BehaviorServer does not set one): only its status
   going IDLE shows it, and the reconstructor calls that an inhibition;
 * the **arguments** of an activation are its goal (the `send_goal` request, where
-  recorded), as a JSON text.
+  recorded), in the shape a catalog can check (`goal_arguments`): headers dropped (frame
+  and stamp are transport), a stamped value as its value, a point, vector or pose as its
+  `[x, y, z]` position, other nested fields as `<field>_<sub>`; the whole goal stays in
+  the raw `send_goal` channel and its service call.
 """
 
 from __future__ import annotations
@@ -46,6 +49,48 @@ def _success(result: object) -> bool | None:
         if name.endswith("_success") and isinstance(value, bool):
             return value
     return None
+
+
+_XYZ = ("x", "y", "z")
+
+
+def _vector(value: dict[str, Any]) -> list[float] | None:
+    if set(value) >= set(_XYZ) and set(value) <= {*_XYZ, "w"} and "w" not in value:
+        numbers = [value[a] for a in _XYZ]
+        if all(isinstance(n, (int, float)) and not isinstance(n, bool) for n in numbers):
+            return [float(n) for n in numbers]
+    return None
+
+
+def _argument(value: Any) -> Any:
+    """One goal field as an argument value (see the module docstring)."""
+    if isinstance(value, list):
+        return [_argument(v) for v in value]
+    if not isinstance(value, dict):
+        return value
+    value = {k: v for k, v in value.items() if k != "header"}
+    vector = _vector(value)
+    if vector is not None:
+        return vector
+    for inner in ("point", "vector", "position", "pose"):  # Stamped, Pose, PoseWithID...
+        if inner in value and isinstance(value[inner], dict):
+            return _argument(value[inner])
+    return {k: _argument(v) for k, v in value.items()}
+
+
+def goal_arguments(goal: dict[str, Any]) -> dict[str, Any]:
+    """A goal (plain fields) as flat activation arguments."""
+    out: dict[str, Any] = {}
+    for key, value in goal.items():
+        if key == "header":
+            continue
+        argument = _argument(value)
+        if isinstance(argument, dict):
+            for sub, inner in goal_arguments(argument).items():
+                out[f"{key}_{sub}"] = inner
+        else:
+            out[key] = argument
+    return out
 
 
 def outcome(status: int, result: object | None = None) -> tuple[EventCode, str] | None:
@@ -92,7 +137,7 @@ class BehaviorTimeline:
         """A send_goal request: the arguments of the behavior's next activation."""
         goal = plain(getattr(request, "goal", None))
         if isinstance(goal, dict):
-            self._arguments[behavior] = json.dumps(goal, sort_keys=True)
+            self._arguments[behavior] = json.dumps(goal_arguments(goal), sort_keys=True)
 
     def goal_status(self, behavior: str, message: object) -> list[Event]:
         """A GoalStatusArray: an end event for each goal seen terminal the first time."""

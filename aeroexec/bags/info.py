@@ -28,7 +28,7 @@ METADATA_NAMES = {1: METADATA_NAME, 2: "ros2_bag"}
 
 
 def _types(connections: list[BagConnection]) -> str:
-    return ", ".join(dict.fromkeys(c.type for c in connections))
+    return ", ".join(dict.fromkeys(c.schema_name or c.type for c in connections))
 
 
 def _first_damage(bag: Bag) -> str | None:

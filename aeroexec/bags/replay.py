@@ -1,4 +1,4 @@
-"""Replay a ROS 1 bag: import it into a temporary recording, replay that (open loop by
+"""Replay a ROS 1 or ROS 2 bag: import it into a temporary recording, replay that (open loop by
 default: a bag is a real flight), report under the bag's name.
 
 The replay engine reads aeroexec recordings only; `bag_recording` is the bridge any
@@ -57,15 +57,24 @@ def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:
 
 
 def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
-    """`replay_recording` for a bag (imported with the shipped Aerostack mapping)."""
+    """`replay_recording` for a bag (imported with the shipped mapping: Aerostack's for a
+    ROS 1 bag, Aerostack2's for a ROS 2 one). An Aerostack2 flight has no catalog of its
+    own: the replay runs its behavior timeline (the reconstructed activations, with the
+    goals as arguments, each ending as recorded) against the `--catalog` given."""
     from aeroexec.replay.engine import replay_recording
 
     with bag_recording(path) as imported:
         if not imported.report.derived.get("mission/command"):
-            raise RecordingError(
-                "no behavior commands to replay: the bag has none of the behavior topics "
+            known = (
                 "the Aerostack mapping knows (behavior_event, list_of_active_behaviors, "
-                "command topics); `aeroexec import --mapping` then replay the .mcap",
+                "command topics)"
+                if imported.report.ros_version == 1
+                else "the Aerostack2 mapping knows (<ns>/<Behavior>/_behavior/behavior_status: "
+                "rosbag2 records it only with --include-hidden-topics)"
+            )
+            raise RecordingError(
+                f"no behavior commands to replay: the bag has none of the behavior topics "
+                f"{known}; `aeroexec import --mapping` then replay the .mcap",
                 Mark(str(path)),
             )
         try:
@@ -77,8 +86,12 @@ def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayRe
         imported.report.reconstructed_activations + imported.report.reconstructed_inhibitions
     )
     if reconstructed:
-        notes.append(
-            f"{reconstructed} of the recorded commands were reconstructed from the bag's "
+        source = (
             "active-behavior list (bags hold no service calls)"
+            if imported.report.ros_version == 1
+            else "behavior status (Aerostack2 starts behaviors with action goals)"
+        )
+        notes.append(
+            f"{reconstructed} of the recorded commands were reconstructed from the bag's {source}"
         )
     return replace(result, recording=str(path), notes=(*result.notes, *notes))

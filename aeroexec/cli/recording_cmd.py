@@ -36,7 +36,8 @@ def info(
         str,
         typer.Argument(
             metavar="REC",
-            help="An MCAP file (aeroexec or any other profile) or a ROS 1 bag.",
+            help="An MCAP file (aeroexec or any other profile), a ROS 1 bag or a ROS 2 "
+            "bag (a rosbag2 directory or a .db3).",
             show_default=False,
         ),
     ],
