@@ -72,8 +72,16 @@ def test_goals_become_the_activation_arguments(flights: dict) -> None:
         c for _, c in _messages(target, "mission/command") if c["command"] == "activate_behavior"
     ]
     assert commands[0]["arguments"] == {"takeoff_height": 1.5, "takeoff_speed": 0.5}
-    assert commands[1]["arguments"]["target_pose"]["point"] == {"x": 4.0, "y": 3.0, "z": 1.5}
-    assert commands[2]["arguments"]["path"][0]["id"] == "wp1"
+    # flattened for a catalog: the point of the stamped target, the path's positions,
+    # the yaw mode's fields; no headers
+    assert commands[1]["arguments"] == {
+        "target_pose": [4.0, 3.0, 1.5],
+        "max_speed": 1.0,
+        "yaw_mode": 0,
+        "yaw_angle": 0.0,
+    }
+    assert commands[2]["arguments"]["path"] == [[2.0, 3.0, 1.5]]
+    assert "header" not in commands[2]["arguments"]
     assert "FIXED_YAW" not in json.dumps(commands[1])  # constants are not values
     # without recorded services, the goals are unknown
     _, bare, _ = flights["mcap-topics-only"]
