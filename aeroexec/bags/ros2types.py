@@ -23,6 +23,7 @@ definition generator only writes such names, and the layout is what matters to C
 
 from __future__ import annotations
 
+import functools
 import os
 from importlib import resources
 from pathlib import Path
@@ -140,14 +141,36 @@ def _is_package(item: object) -> bool:
     return any(_name(c) in ("msg", "srv", "action") for c in _children(item))
 
 
+@functools.lru_cache(maxsize=1)
+def _shipped_types() -> Typesdict:
+    """The shipped interfaces, parsed once per process (~60 files: 0.1 s)."""
+    return _parse(read_interfaces(resources.files("aeroexec").joinpath(*MSG2_DIR)), None)
+
+
+def _parse(found: dict[tuple[str, str, str], str], where: str | None) -> Typesdict:
+    types: Typesdict = {}
+    for (kind, pkg, name), text in found.items():
+        try:
+            types.update(interface_types(kind, pkg, name, text))
+        except Exception as exc:  # TypesysError, ValueError: name the file
+            if where is None:
+                raise
+            raise RecordingError(
+                f"cannot read the definition: {_first_line(exc)}",
+                Mark(str(Path(where) / pkg / kind / f"{name}.{kind}")),
+            ) from None
+    return types
+
+
 class Ros2Types:
-    """The fallback store of a ROS 2 import: Jazzy + shipped interfaces + `--types`."""
+    """The fallback store of a ROS 2 import: Jazzy + shipped interfaces + `--types`.
+    `--types` is read and checked at once; the store is built when first needed (a bag
+    with every definition and no service events never needs it: building it is rosbags'
+    code generation for some 400 types)."""
 
     def __init__(self, types_dir: str | os.PathLike[str] | None = None) -> None:
-        self.store: Typestore = get_typestore(Stores.ROS2_JAZZY)
-        self.notes: list[str] = []
-        shipped = resources.files("aeroexec").joinpath(*MSG2_DIR)
-        self._register(read_interfaces(shipped), None)
+        self._store: Typestore | None = None
+        self._user: Typesdict = {}
         self.types_dir = None if types_dir is None else str(types_dir)
         if types_dir is not None:
             folder = Path(types_dir)
@@ -161,24 +184,19 @@ class Ros2Types:
                     "no <package>/msg, srv or action folders with definitions in it",
                     Mark(str(types_dir)),
                 )
-            self._register(found, str(types_dir))
+            self._user = _parse(found, str(types_dir))
 
-    def _register(self, found: dict[tuple[str, str, str], str], where: str | None) -> None:
-        types: Typesdict = {}
-        for (kind, pkg, name), text in found.items():
-            try:
-                types.update(interface_types(kind, pkg, name, text))
-            except Exception as exc:  # TypesysError, ValueError: name the file
-                if where is None:
-                    raise
-                raise RecordingError(
-                    f"cannot read the definition: {_first_line(exc)}",
-                    Mark(str(Path(where) / pkg / kind / f"{name}.{kind}")),
-                ) from None
-        # --types wins over the shipped and Jazzy definitions of the same name
-        for name in types:
-            self.store.fielddefs.pop(name, None)
-        self.store.register(types)
+    @property
+    def store(self) -> Typestore:
+        if self._store is None:
+            store = get_typestore(Stores.ROS2_JAZZY)
+            # --types wins over the shipped definitions, and both over Jazzy's
+            types = {**_shipped_types(), **self._user}
+            for name in types:
+                store.fielddefs.pop(name, None)
+            store.register(types)
+            self._store = store
+        return self._store
 
     def definition(self, msgtype: str) -> str | None:
         """The full `ros2msg` definition (with its `MSG:` sections) of `msgtype`, or None
