@@ -245,7 +245,6 @@ class _Import:
         self.unreadable: dict[str, int] = {}
         self.timeline = BehaviorTimeline()
         self.calls = ServiceCalls(drone)
-        #: (behavior, request) of the get_result calls of each action, by call.
         self.selected = mapping.select(((c.topic, c.type) for c in bag.connections), drone)
         self.handlers: dict[int, list[_Entry]] = {}
         self._resolve(self.selected)

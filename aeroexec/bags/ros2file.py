@@ -18,6 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
 
+from mcap.reader import make_reader
 from rosbags.interfaces import MessageDefinitionFormat
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.metadata import dump_qos_v8
@@ -208,8 +209,6 @@ class Ros2Bag:
             return Counter({f"{self._reader.compression_format} ({mode})": 1}), 0
         counts: Counter[str] = Counter()
         for file in self._storage_files(".mcap"):
-            from mcap.reader import make_reader
-
             try:
                 with open(file, "rb") as stream:
                     summary = make_reader(stream).get_summary()
