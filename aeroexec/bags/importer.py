@@ -245,6 +245,8 @@ class _Import:
         self.unreadable: dict[str, int] = {}
         self.timeline = BehaviorTimeline()
         self.calls = ServiceCalls(drone)
+        #: The last behavior status bytes of each connection: an unchanged one is skipped.
+        self._last_status: dict[int, bytes] = {}
         self.selected = mapping.select(((c.topic, c.type) for c in bag.connections), drone)
         self.handlers: dict[int, list[_Entry]] = {}
         self._resolve(self.selected)
@@ -373,9 +375,14 @@ class _Import:
 
     def _handle(self, entry: _Entry, connection: BagConnection, time_ns: int, data: bytes) -> None:
         """Decode what is used, when it is used: a pose only when it gives a state (or
-        is the last one), velocity/battery/status only the latest before such a pose."""
+        is the last one), velocity/battery/status only the latest before such a pose, a
+        behavior status only when its bytes changed (it repeats every 100 ms)."""
         kind = entry[0]
-        if kind is Kind.POSE:
+        if kind is Kind.BEHAVIOR_STATUS:
+            if self._last_status.get(connection.id) == data:
+                return
+            self._last_status[connection.id] = data
+        elif kind is Kind.POSE:
             last = self._last_state_ns
             if last is not None and time_ns - last < self.period:
                 self._skipped = (entry, connection, time_ns, data)
