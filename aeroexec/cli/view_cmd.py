@@ -58,7 +58,7 @@ def view(
         Path,
         typer.Argument(
             metavar="REC",
-            help="An aeroexec recording (MCAP) or a ROS 1 bag (imported on the way).",
+            help="An aeroexec recording (MCAP) or a ROS 1 or ROS 2 bag (imported on the way).",
             show_default=False,
         ),
     ],
