@@ -225,3 +225,45 @@ def test_channels_pass_the_viewers_schema_parsers(name: str, imported: dict) -> 
     json_schemas = {s.name for s in summary.schemas.values() if s.encoding == "jsonschema"}
     checked = {line.split(" ", 1)[0] for line in result.stdout.splitlines() if line.strip()}
     assert json_schemas <= checked
+
+
+#: A node_modules folder with @foxglove/rosmsg, @foxglove/rosmsg2-serialization and
+#: @mcap/core (`npm install` them anywhere): the test then decodes with Foxglove's own
+#: TypeScript libraries, the ones the Foxglove app runs.
+FOXGLOVE_NODE_MODULES = os.environ.get("AEROEXEC_FOXGLOVE_NODE_MODULES", "")
+DECODE_SCRIPT = REPO / "tests" / "tools" / "foxglove_ros2_decode.mjs"
+
+
+@pytest.mark.skipif(
+    not FOXGLOVE_NODE_MODULES or shutil.which("node") is None,
+    reason="set AEROEXEC_FOXGLOVE_NODE_MODULES to a node_modules with @foxglove/rosmsg, "
+    "@foxglove/rosmsg2-serialization and @mcap/core (and install node) to decode with "
+    "Foxglove's own libraries",
+)
+@pytest.mark.parametrize("bag", [SERVICES_MCAP, ADD_TWO_INTS, MSGTYPES])
+def test_foxglove_decodes_every_raw_channel_the_bag_itself_fails_on(
+    bag: Path, tmp_path: Path
+) -> None:
+    def decode(path: Path) -> dict:
+        modules = tmp_path / "node_modules"
+        if not modules.exists():
+            modules.symlink_to(FOXGLOVE_NODE_MODULES)
+        shutil.copyfile(DECODE_SCRIPT, tmp_path / DECODE_SCRIPT.name)
+        done = subprocess.run(
+            ["node", str(tmp_path / DECODE_SCRIPT.name), str(path)],
+            capture_output=True,
+            text=True,
+            check=True,
+            cwd=tmp_path,
+        )
+        return json.loads(done.stdout)
+
+    target = tmp_path / "imported.mcap"
+    report = import_bag(bag, target, compression="none")
+    imported = decode(target)
+    assert imported["bad"] == 0, imported["errors"]
+    assert imported["ok"] == report.messages
+    if bag is not MSGTYPES:  # the bag's own service events: Foxglove cannot parse '---'
+        original = decode(bag)
+        assert original["bad"] > 0
+        assert all("---" in error for error in original["errors"].values())
