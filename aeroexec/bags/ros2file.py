@@ -19,7 +19,7 @@ from pathlib import Path
 from types import TracebackType
 
 from mcap.reader import make_reader
-from rosbags.interfaces import MessageDefinitionFormat
+from rosbags.interfaces import Connection, ConnectionExtRosbag2, MessageDefinitionFormat
 from rosbags.rosbag2 import Reader
 from rosbags.rosbag2.metadata import dump_qos_v8
 
@@ -148,9 +148,9 @@ class Ros2Bag:
                     texts.setdefault(type_name, text)
         return texts
 
-    def _connection(self, c: object, services: dict[str, str]) -> BagConnection:
-        msgtype: str = c.msgtype  # type: ignore[attr-defined]
-        msgdef = c.msgdef  # type: ignore[attr-defined]
+    def _connection(self, c: Connection, services: dict[str, str]) -> BagConnection:
+        msgtype = c.msgtype
+        msgdef = c.msgdef
         text = msgdef.data
         encoding = _FORMATS.get(msgdef.format, "")
         extra: list[tuple[str, str]] = []
@@ -165,7 +165,7 @@ class Ros2Bag:
             try:
                 fixed = self.types.service_event_definition(msgtype, text)
             except ValueError as exc:
-                self.notes.append(f"{c.topic}: the service definition cannot be used: {exc}")  # type: ignore[attr-defined]
+                self.notes.append(f"{c.topic}: the service definition cannot be used: {exc}")
             else:
                 extra.append(("bag_definition", text))
                 text = fixed
@@ -173,28 +173,29 @@ class Ros2Bag:
             generated = self.types.definition(msgtype)
             if generated is not None:
                 text, encoding = generated, "ros2msg"
-                extra.append(("definition_from", self.types.types_dir or "aeroexec"))
+                extra.append(("definition_from", self.types.origin(msgtype)))
             else:
                 self.notes.append(
-                    f"{c.topic}: the bag has no definition of {msgtype} and aeroexec knows "  # type: ignore[attr-defined]
+                    f"{c.topic}: the bag has no definition of {msgtype} and aeroexec knows "
                     "none (--types DIR): its raw channel has no schema"
                 )
-        ext = c.ext  # type: ignore[attr-defined]
+        ext = c.ext
+        assert isinstance(ext, ConnectionExtRosbag2)
         qos = ext.offered_qos_profiles
         if qos:
             extra.append(("offered_qos_profiles", dump_qos_v8(qos)))
-        if c.digest:  # type: ignore[attr-defined]
-            extra.append(("topic_type_hash", c.digest))  # type: ignore[attr-defined]
+        if c.digest:
+            extra.append(("topic_type_hash", c.digest))
         return BagConnection(
-            id=c.id,  # type: ignore[attr-defined]
-            topic=c.topic,  # type: ignore[attr-defined]
+            id=c.id,
+            topic=c.topic,
             type=ros1_name(msgtype),
             msgtype=msgtype,
             msgdef=text,
             md5sum="",
             callerid=None,
             latching=None,
-            count=c.msgcount,  # type: ignore[attr-defined]
+            count=c.msgcount,
             encoding=ext.serialization_format,
             schema_encoding=encoding,
             schema_name=msgtype,

@@ -198,6 +198,13 @@ class Ros2Types:
             self._store = store
         return self._store
 
+    def origin(self, msgtype: str) -> str:
+        """Where the definition of `msgtype` came from: the `--types` folder, or
+        `aeroexec` (shipped, or rosbags' Jazzy types)."""
+        if self.types_dir is not None and ros2_name(msgtype) in self._user:
+            return self.types_dir
+        return "aeroexec"
+
     def definition(self, msgtype: str) -> str | None:
         """The full `ros2msg` definition (with its `MSG:` sections) of `msgtype`, or None
         when no definition of it (or of a type it uses) is known."""
