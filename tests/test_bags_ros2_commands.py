@@ -129,3 +129,22 @@ def test_the_foxglove_layout_shows_an_aerostack2_import(flights: dict, tmp_path:
         "/drone0/scene",
         "/drone0/vehicle/state",
     } <= wanted
+
+
+def test_info_lists_the_imported_behavior_timeline(flights: dict) -> None:
+    code, out, err = _invoke("info", flights["sqlite3"], "-f", "json")
+    assert code == 0, err
+    runs = [(r["behavior"], r["outcome"]) for r in json.loads(out)["behaviors"]]
+    assert runs == [
+        ("TakeoffBehavior", "GOAL_ACHIEVED"),
+        ("GoToBehavior", "GOAL_ACHIEVED"),
+        ("FollowPathBehavior", "WRONG_PROGRESS"),
+        ("GoToBehavior", "INTERRUPTED"),
+        ("LandBehavior", "GOAL_ACHIEVED"),
+    ]
+    code, out, err = _invoke("info", flights["sqlite3_bag"], "-f", "json")
+    assert code == 0, err
+    bag = json.loads(out)
+    assert bag["profile"] == "ros2" and bag["complete"] is True
+    assert bag["metadata"]["ros2_bag"]["format"] == "rosbag2 sqlite3"
+    assert bag["channels"]["/drone0/TakeoffBehavior/_behavior/behavior_status"] == 270
