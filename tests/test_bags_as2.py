@@ -142,3 +142,10 @@ def test_action_service_events_with_raw_action_text_decode(flights: dict) -> Non
         for schema, channel, message in reader.iter_messages():
             if channel.message_encoding == "cdr" and not schema.name.endswith("_Event"):
                 factory.decoder_for("cdr", schema)(message.data)
+
+
+def test_same_flight_gives_the_same_bytes(flights: dict, tmp_path: Path) -> None:
+    bag, target, _ = flights["mcap"]
+    again = tmp_path / "again.mcap"
+    import_bag(bag, again)
+    assert again.read_bytes() == target.read_bytes()
