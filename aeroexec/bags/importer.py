@@ -544,6 +544,15 @@ class _Import:
                 "the bag has behavior status but no action status or results: every "
                 "behavior going back to IDLE is reconstructed as inhibited (outcomes unknown)"
             )
+        if Kind.BEHAVIOR_STATUS not in selected and selected & {
+            Kind.ACTION_STATUS,
+            Kind.ACTION_RESULT,
+        }:
+            notes.append(
+                "the bag has action status or results but no behavior status (recorded "
+                "with --include-hidden-topics): each activation is reconstructed at its end "
+                "(durations unknown)"
+            )
         if Kind.ACTIVE_BEHAVIORS in selected and Kind.BEHAVIOR_EVENT not in selected:
             notes.append(
                 "the bag has active-behavior lists but no behavior events: every behavior "
