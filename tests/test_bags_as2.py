@@ -149,3 +149,26 @@ def test_same_flight_gives_the_same_bytes(flights: dict, tmp_path: Path) -> None
     again = tmp_path / "again.mcap"
     import_bag(bag, again)
     assert again.read_bytes() == target.read_bytes()
+
+
+def test_without_behavior_status_activations_are_placed_at_their_ends(
+    flights: dict, tmp_path: Path
+) -> None:
+    """A mapping (or a bag recorded without hidden topics' behavior status) with only the
+    action status: each goal that ended is an activation of unknown duration at its end;
+    the stopped one, which has no terminal status, is not seen at all; a note says so."""
+    mapping = tmp_path / "outcomes_only.yaml"
+    mapping.write_text(
+        "version: 1\ndrone: drone0\ntopics:\n"
+        '  - {topic: "/{drone}/*/_action/status", kind: action_status}\n'
+    )
+    bag, _, _ = flights["sqlite3-topics-only"]
+    target = tmp_path / "outcomes.mcap"
+    report = import_bag(bag, target, mapping=mapping)
+    assert any("no behavior status" in note for note in report.notes)
+    ends = _messages(target, "behavior_event")
+    assert [(e["name"], e["code"]) for _, e in ends] == [
+        (n, code) for n, _, _, code in EXPECTED if code != "INTERRUPTED"
+    ]
+    starts = _messages(target, "activate_behavior")
+    assert [round(t, 3) for t, _ in starts] == [round(t, 3) for t, _ in ends]
