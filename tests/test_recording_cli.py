@@ -111,7 +111,8 @@ def test_info_on_foreign_mcap_counts_match_mcap(fixture: Path) -> None:
     assert report["channels"] == _mcap_counts(fixture)
     assert report["messages"] == sum(_mcap_counts(fixture).values())
     assert report["behaviors"] == []
-    assert any("not aeroexec" in note for note in report["notes"])
+    # a ROS 2 MCAP is read as a ROS 2 bag (its topics by their original names)
+    assert any("a ROS 2 bag" in note for note in report["notes"])
     code, text, _ = _invoke("info", str(fixture))
     assert code == 0 and "profile:     ros2" in text
 

@@ -258,11 +258,14 @@ def test_mcap_without_mission_commands(work: Path) -> None:
 
 
 def test_foreign_mcap() -> None:
+    """A ROS 2 MCAP is a bag (imported first, Aerostack2 mapping): the talker has no
+    behavior topics, so nothing to replay."""
     path = REPO / "tests" / "fixtures" / "recording" / "mcap_ros2_talker_zstd.mcap"
     code, _, err = cli("replay", str(path))
     assert code == 2
-    assert one_error_line(err) == (
-        f"{path}: error: not an aeroexec recording (profile 'ros2'): no mission commands to replay"
+    assert one_error_line(err).startswith(
+        f"{path}: error: no behavior commands to replay: the bag has none of the behavior "
+        "topics the Aerostack2 mapping knows"
     )
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from as2_support import write_flight
 from rerun.chunk import RrdReader
 from typer.testing import CliRunner
 
@@ -242,17 +243,32 @@ def test_truncated_inside_the_magic(flight: Path, tmp_path: Path) -> None:
     _assert_one_line_error(code, out, err, str(cut))
 
 
-def test_foreign_mcap_names_its_profile(tmp_path: Path) -> None:
+def test_ros2_mcap_without_mapped_topics_is_refused(tmp_path: Path) -> None:
+    """A ROS 2 MCAP is a bag: imported first (Aerostack2 mapping); the talker has none
+    of its topics."""
     assert ROS2_BAG.is_file()
     code, out, err = _invoke("view", ROS2_BAG, "--output", tmp_path / "x.rrd")
-    _assert_one_line_error(code, out, err, "not an aeroexec recording (profile ros2)")
+    _assert_one_line_error(code, out, err, "nothing to show: the bag has none of the topics")
     assert not (tmp_path / "x.rrd").exists()
 
 
 def test_foreign_second_recording_writes_nothing(flight: Path, tmp_path: Path) -> None:
     code, out, err = _invoke("view", flight, ROS2_BAG, "--no-spawn")
-    _assert_one_line_error(code, out, err, "profile ros2")
+    _assert_one_line_error(code, out, err, "nothing to show")
     assert list(tmp_path.glob("*.rrd")) == []
+
+
+def test_an_aerostack2_bag_directory_is_imported_and_viewed(tmp_path: Path, headless: None) -> None:
+    bag = write_flight(tmp_path / "rosbag2_flight", "sqlite3")
+    code, out, err = _invoke("view", bag, "--no-spawn")
+    assert code == 0, err
+    target = tmp_path / "rosbag2_flight.rrd"
+    assert f"wrote {target}" in out
+    assert f"{bag}: " in out and "5 behavior events" in out and "4 behaviors" in out
+    entities = _entities(target)
+    assert {"/trajectory", "/vehicle"} <= entities
+    assert any("TakeoffBehavior" in e for e in entities)
+    assert set(tmp_path.iterdir()) == {bag, target}
 
 
 def test_missing_file(tmp_path: Path) -> None:

@@ -32,7 +32,7 @@ _OP_BAG_HEADER = 3
 _COMPRESSION_NAMES = {id(func): name for name, func in decompressors.items()}
 
 
-def is_bag(path: str | os.PathLike[str]) -> bool:
+def is_ros1_bag(path: str | os.PathLike[str]) -> bool:
     """Does `path` look like a ROS 1 bag (`.bag` name, or the bag magic)? A directory,
     a missing file or an unreadable one counts as a bag when named `.bag`, so that the
     bag reader reports the problem."""
@@ -61,6 +61,15 @@ class BagConnection:
     callerid: str | None
     latching: int | None
     count: int
+    #: How the messages are serialized (`ros1`, or `cdr` for a ROS 2 bag) and how the
+    #: definition is written (`ros1msg`, `ros2msg`, `ros2idl`; "" when the bag has none
+    #: and aeroexec knows none): the raw channel's message and schema encodings.
+    encoding: str = "ros1"
+    schema_encoding: str = "ros1msg"
+    #: The raw channel's schema name ("" = `type`; ROS 2 keeps `pkg/msg/Name`).
+    schema_name: str = ""
+    #: More channel metadata (ROS 2: the offered QoS profiles, the type hash, ...).
+    extra: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,7 +146,11 @@ def _precheck(file: Path, name: str) -> _Header:
 
 
 class BagFile:
-    """An open bag: its connections, chunk facts and a streaming message iterator."""
+    """An open bag: its connections, chunk facts and a streaming message iterator.
+    (`ros2file.Ros2Bag` has the same face for ROS 2 bags.)"""
+
+    ros_version = 1
+    format = "2.0"
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = Path(path)
@@ -245,6 +258,7 @@ def _reason(exc: BaseException) -> str:
 _TUPLE_REPR = re.compile(r"""\((['"])(.*?)\1,\)""")
 
 
-def open_bag(path: str | os.PathLike[str]) -> BagFile:
-    """Open `path` for reading (`RecordingError`, one line, if it is not a readable bag)."""
+def open_ros1_bag(path: str | os.PathLike[str]) -> BagFile:
+    """Open the ROS 1 bag `path` for reading (`RecordingError`, one line, if it is not
+    a readable bag)."""
     return BagFile(path)

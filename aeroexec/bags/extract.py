@@ -9,6 +9,7 @@ when the message has none of them, so one mapping handles every version.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -36,6 +37,8 @@ _TERMINATION_CAUSES = {
 }
 #: droneMsgsROS/droneStatus values that mean "in the air".
 _FLYING_STATUSES = frozenset({3, 4, 6, 8, 9})  # FLYING, HOVERING, TAKING_OFF, LANDING, LOOPING
+#: as2_msgs/PlatformStatus states in the air: TAKING_OFF=2, FLYING=3, LANDING=4.
+_AS2_FLYING_STATES = frozenset({2, 3, 4})
 #: droneMsgsROS/ProcessState values of a running process (Running=3, Started=7).
 _RUNNING_STATES = frozenset({3, 7})
 
@@ -273,11 +276,39 @@ def battery(message: object) -> float | None:
 
 
 def flying(message: object) -> bool | None:
-    """In the air? From droneMsgsROS/droneStatus (`status`) or a `flying` flag."""
+    """In the air? From droneMsgsROS/droneStatus (`status`), Aerostack2's
+    as2_msgs/PlatformInfo (`status.state`: TAKING_OFF, FLYING, LANDING) or a `flying`
+    flag."""
     flag = getattr(message, "flying", None)
     if isinstance(flag, bool):
         return flag
     status = getattr(message, "status", None)
+    state = getattr(status, "state", None)
+    if isinstance(state, int) and not isinstance(state, bool):
+        return state in _AS2_FLYING_STATES
     if isinstance(status, bool) or not isinstance(status, int):
         return None
     return status in _FLYING_STATUSES
+
+
+def plain(value: object) -> Any:
+    """A decoded message as JSON-ready values: messages as dicts (by field), arrays
+    (numpy) as lists, numbers and strings as they are."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {
+            f.name: plain(getattr(value, f.name))
+            for f in dataclasses.fields(value)
+            # rosbags' __msgtype__, and the constants (UPPER_CASE in ROS 2), which its
+            # generated classes list as fields too
+            if not f.name.startswith("__") and not f.name.isupper()
+        }
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    tolist = getattr(value, "tolist", None)  # numpy arrays and scalars
+    if callable(tolist):
+        return plain(tolist())
+    if isinstance(value, bytes):
+        return list(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    return value

@@ -1,14 +1,16 @@
-"""`import_bag`: a ROS 1 bag to an aeroexec-profile MCAP file, losing nothing.
+"""`import_bag`: a ROS 1 or ROS 2 bag to an aeroexec-profile MCAP file, losing nothing.
 
-Every message of every connection is copied byte for byte to a raw `ros1` channel
-(`sink.py`); only messages of mapped topics are decoded, and only those used (a pose
+Every message of every connection is copied byte for byte to a raw `ros1` or `cdr`
+channel (`sink.py`); only messages of mapped topics are decoded, and only those used (a pose
 when it gives a vehicle state, the latest velocity/battery/status before it), to derive
 the aeroexec channels: `behavior_event`, `list_of_active_behaviors`, reconstructed
 `mission/command` and coordinator calls (`reconstruct.py`),
 `list_of_active_capabilities` (+ `capability_state`), `beliefs`, `process_state`, `vehicle/state` (+
 `vehicle/transform` when the pose changed), the `scene` with the vehicle's body at the
 bag's first message when a pose is mapped (a bag has no world; its first transform
-comes with its first pose), `call_log` for the reconstructed calls. Log times are the bag's.
+comes with its first pose), `call_log` for the reconstructed calls. A ROS 2 bag adds
+Aerostack2's behavior status, action status, goals and results (`as2.py`, feeding the
+same reconstruction) and its recorded service calls (`ros2calls.py`). Log times are the bag's.
 Messages are written in bag time order: reconstruction decides an input only when the 2
 x grace after it has been read, so the messages from its horizon on wait (about a second
 of bag time) until it has: the bag's own in a queue (they come in time order), the
@@ -31,7 +33,8 @@ from typing import Any
 
 from aeroexec import __version__
 from aeroexec.bags import extract
-from aeroexec.bags.bagfile import BagConnection, BagFile, open_bag
+from aeroexec.bags.as2 import BehaviorTimeline
+from aeroexec.bags.bagfile import BagConnection
 from aeroexec.bags.derive import (
     BeliefTracker,
     CapabilityTracker,
@@ -41,7 +44,9 @@ from aeroexec.bags.derive import (
 )
 from aeroexec.bags.mapping import Kind, Mapping, Rule, check_drone, load_mapping
 from aeroexec.bags.reconstruct import ACTIVATE, INHIBIT, Reconstructor, Stats
-from aeroexec.bags.sink import COMPRESSIONS, RAW_PREFIX, ImportSink
+from aeroexec.bags.ros2calls import Call, ServiceCalls
+from aeroexec.bags.sink import COMPRESSIONS, RAW_PREFIXES, ImportSink
+from aeroexec.bags.source import Bag, open_bag, ros_version_of
 from aeroexec.bags.types import Decoder, TypeResolver
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.outputs import whole_file_or_none
@@ -58,16 +63,37 @@ from aeroexec.recording.writer import METADATA_NAME
 
 #: The import's metadata: what replay and info read (clock and vehicle kinds).
 CLOCK = "wall"
-VEHICLE = "ros1-bag"
-BAG_METADATA = "ros1_bag"
+#: By ROS version: the `vehicle` metadata and the name of the bag's own metadata.
+VEHICLES = {1: "ros1-bag", 2: "ros2-bag"}
+BAG_METADATAS = {1: "ros1_bag", 2: "ros2_bag"}
+VEHICLE = VEHICLES[1]
+BAG_METADATA = BAG_METADATAS[1]
 MAPPING_ATTACHMENT = "bag_mapping.yaml"
 _NS = 1_000_000_000
 #: Progress is reported every this many bag messages.
 PROGRESS_EVERY = 1000
 #: Kinds of which only the latest message before a vehicle state matters.
 _LATEST_ONLY = frozenset({Kind.VELOCITY, Kind.BATTERY, Kind.FLIGHT_STATUS})
+#: ROS 2 kinds, one topic per behavior or service (named by the rule's `*`).
+_ROS2_KINDS = frozenset(
+    {
+        Kind.BEHAVIOR_STATUS,
+        Kind.ACTION_STATUS,
+        Kind.ACTION_GOAL,
+        Kind.ACTION_RESULT,
+        Kind.SERVICE_EVENTS,
+    }
+)
 _BEHAVIOR_KINDS = frozenset(
-    {Kind.BEHAVIOR_EVENT, Kind.ACTIVE_BEHAVIORS, Kind.ACTIVATE_COMMAND, Kind.INHIBIT_COMMAND}
+    {
+        Kind.BEHAVIOR_EVENT,
+        Kind.ACTIVE_BEHAVIORS,
+        Kind.ACTIVATE_COMMAND,
+        Kind.INHIBIT_COMMAND,
+        Kind.BEHAVIOR_STATUS,
+        Kind.ACTION_STATUS,
+        Kind.ACTION_RESULT,
+    }
 )
 
 
@@ -90,6 +116,7 @@ class ImportReport:
     reconstructed_activations: int
     reconstructed_inhibitions: int
     notes: tuple[str, ...] = field(default=())
+    ros_version: int = 1
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -109,13 +136,15 @@ class ImportReport:
                 "inhibitions": self.reconstructed_inhibitions,
             },
             "notes": list(self.notes),
+            "ros_version": self.ros_version,
         }
 
     def summary(self) -> str:
         lines = [
             f"{self.source} -> {self.target}: {self.messages} messages on "
             f"{self.topics} topics ({self.connections} connections, {self.compression}) "
-            f"carried over as raw ros1 channels under {RAW_PREFIX}/",
+            f"carried over as raw {'ros1' if self.ros_version == 1 else 'cdr'} channels "
+            f"under {RAW_PREFIXES[self.ros_version]}/",
         ]
         for kind, topic in self.mapped.items():
             lines.append(f"  {kind:<20} <- {topic}")
@@ -131,9 +160,12 @@ class ImportReport:
         return "\n".join(lines)
 
 
-#: A mapped message kept undecoded until it is needed: ((kind, decoder), connection,
-#: log time, bytes).
-_Pending = tuple[tuple[Kind, Decoder], BagConnection, int, bytes]
+#: How one mapped connection is handled: its kind, its decoder, and the name the rule's
+#: `*` matched (a behavior, a service; "" for exact topics).
+_Entry = tuple[Kind, Decoder, str]
+#: A mapped message kept undecoded until it is needed: (entry, connection, log time,
+#: bytes).
+_Pending = tuple[_Entry, BagConnection, int, bytes]
 
 
 class _Ordered:
@@ -200,7 +232,7 @@ class _Ordered:
 class _Import:
     """One import run (state shared by the per-message handlers)."""
 
-    def __init__(self, bag: BagFile, mapping: Mapping, drone: str, sink: ImportSink) -> None:
+    def __init__(self, bag: Bag, mapping: Mapping, drone: str, sink: ImportSink) -> None:
         self.bag = bag
         self.drone = drone
         self.sink = sink
@@ -220,13 +252,20 @@ class _Import:
         self.processes = ProcessTracker()
         self.undecodable: dict[str, int] = {}
         self.unreadable: dict[str, int] = {}
+        self.timeline = BehaviorTimeline()
+        self.calls = ServiceCalls(drone)
+        #: The last behavior status bytes of each connection: an unchanged one is skipped.
+        self._last_status: dict[int, bytes] = {}
         self.selected = mapping.select(((c.topic, c.type) for c in bag.connections), drone)
-        self.handlers: dict[int, tuple[Kind, Decoder]] = {}
+        self.handlers: dict[int, list[_Entry]] = {}
         self._resolve(self.selected)
         #: Behavior topics mapped: reconstruction may insert messages, so order matters.
-        self.reconstructing = any(kind in _BEHAVIOR_KINDS for kind, _ in self.handlers.values())
+        self.reconstructing = any(kind in _BEHAVIOR_KINDS for kind in self._kinds())
 
     # -- set-up ------------------------------------------------------------------------------
+    def _kinds(self) -> set[Kind]:
+        return {entry[0] for entries in self.handlers.values() for entry in entries}
+
     def _resolve(self, selected: dict[Kind, Rule]) -> None:
         resolver = TypeResolver()
         for kind, rule in selected.items():
@@ -237,14 +276,18 @@ class _Import:
                     continue  # a type-only rule takes one topic, the first of that type
                 try:
                     decoder = resolver.decoder(
-                        connection.msgtype, connection.msgdef, connection.md5sum
+                        connection.msgtype,
+                        connection.msgdef,
+                        connection.md5sum,
+                        connection.schema_encoding,
                     )
                 except ValueError as exc:
                     self.notes.append(f"{connection.topic} not mapped as {kind.value}: {exc}")
                     continue
                 if decoder.warning:
                     self.notes.append(decoder.warning)
-                self.handlers[connection.id] = (kind, decoder)
+                label = rule.label(connection.topic, self.drone) or ""
+                self.handlers.setdefault(connection.id, []).append((kind, decoder, label))
 
     def _first_topic(self, rule: Rule) -> str:
         for connection in self.bag.connections:
@@ -256,8 +299,7 @@ class _Import:
     def mapped(self) -> dict[str, str]:
         topics: dict[str, str] = {}
         for connection in self.bag.connections:
-            entry = self.handlers.get(connection.id)
-            if entry is not None:
+            for entry in self.handlers.get(connection.id, ()):
                 topics.setdefault(entry[0].value, connection.topic)
         return topics
 
@@ -295,12 +337,16 @@ class _Import:
                 sink.raw(connection, time_ns, data)
             else:
                 self.out.raw(time_ns, connection, data)
-            entry = handlers.get(connection.id)
-            if entry is not None:
-                self._handle(entry, connection, time_ns, data)
+            entries = handlers.get(connection.id)
+            if entries is not None:
+                for entry in entries:
+                    self._handle(entry, connection, time_ns, data)
         if self._skipped is not None:  # the last pose always gives the final state
             self._flush_latest()
             self._decode(*self._skipped)
+        last = self.bag.end_ns or 0
+        for call in self.calls.unanswered():  # at the end: their answer never came
+            self._call(call, last)
         recon.finish()
         self._take_reconstruction()
         self.out.release(None)
@@ -331,13 +377,22 @@ class _Import:
             return
         self.out.derived(time_ns, _Ordered.OTHER, topic, data)
 
-    def _handle(
-        self, entry: tuple[Kind, Decoder], connection: BagConnection, time_ns: int, data: bytes
-    ) -> None:
+    def _call(self, call: Call, time_ns: int) -> None:
+        if not self.reconstructing:
+            self.sink.derived_message(call.topic, time_ns, call.data, call=True)
+            return
+        self.out.derived(time_ns, _Ordered.OTHER, call.topic, call.data, True)
+
+    def _handle(self, entry: _Entry, connection: BagConnection, time_ns: int, data: bytes) -> None:
         """Decode what is used, when it is used: a pose only when it gives a state (or
-        is the last one), velocity/battery/status only the latest before such a pose."""
+        is the last one), velocity/battery/status only the latest before such a pose, a
+        behavior status only when its bytes changed (it repeats every 100 ms)."""
         kind = entry[0]
-        if kind is Kind.POSE:
+        if kind is Kind.BEHAVIOR_STATUS:
+            if self._last_status.get(connection.id) == data:
+                return
+            self._last_status[connection.id] = data
+        elif kind is Kind.POSE:
             last = self._last_state_ns
             if last is not None and time_ns - last < self.period:
                 self._skipped = (entry, connection, time_ns, data)
@@ -354,16 +409,18 @@ class _Import:
             self._decode(*latest)
         self._latest.clear()
 
-    def _decode(
-        self, entry: tuple[Kind, Decoder], connection: BagConnection, time_ns: int, data: bytes
-    ) -> None:
-        kind, decoder = entry
+    def _decode(self, entry: _Entry, connection: BagConnection, time_ns: int, data: bytes) -> None:
+        kind, decoder, label = entry
         try:
             message = decoder.decode(data)
         except Exception:  # SerdeError and friends: the raw copy is kept anyway
             self.undecodable[connection.topic] = self.undecodable.get(connection.topic, 0) + 1
             return
-        if not self._dispatch(kind, message, time_ns):
+        if kind in _ROS2_KINDS:
+            handled = self._dispatch_ros2(kind, label, message, time_ns)
+        else:
+            handled = self._dispatch(kind, message, time_ns)
+        if not handled:
             self.unreadable[connection.topic] = self.unreadable.get(connection.topic, 0) + 1
 
     def _dispatch(self, kind: Kind, message: object, time_ns: int) -> bool:
@@ -407,6 +464,39 @@ class _Import:
             )
         else:
             return self._dispatch_lists(kind, message, time_ns)
+        return True
+
+    def _dispatch_ros2(self, kind: Kind, label: str, message: object, time_ns: int) -> bool:
+        """Aerostack2's behavior topics (`as2.py`) and service events (`ros2calls.py`)."""
+        if kind is Kind.BEHAVIOR_STATUS:
+            if not hasattr(message, "status"):
+                return False
+            active = self.timeline.status(label, message)
+            if active is not None:
+                self.recon.active_list(time_ns, active)
+        elif kind is Kind.ACTION_STATUS:
+            if not hasattr(message, "status_list"):
+                return False
+            for event in self.timeline.goal_status(label, message):
+                self.recon.event(time_ns, event)
+        elif kind is Kind.SERVICE_EVENTS:
+            if not hasattr(message, "info"):
+                return False
+            call = self.calls.event("/" + label, message, time_ns)
+            if call is not None:
+                self._call(call, time_ns)
+        else:  # ACTION_GOAL, ACTION_RESULT: service events of the action's services
+            if not hasattr(message, "info"):
+                return False
+            request = next(iter(getattr(message, "request", None) or ()), None)
+            response = next(iter(getattr(message, "response", None) or ()), None)
+            if kind is Kind.ACTION_GOAL:
+                if request is not None:
+                    self.timeline.goal(label, request)
+            elif response is not None:
+                event = self.timeline.result(label, request, response)
+                if event is not None:
+                    self.recon.event(time_ns, event)
         return True
 
     def _dispatch_lists(self, kind: Kind, message: object, time_ns: int) -> bool:
@@ -457,7 +547,24 @@ class _Import:
                 f"{stats.bad_arguments} behavior argument text(s) were not a YAML mapping "
                 "(replaced by no arguments)"
             )
-        selected = {kind for kind, _ in self.handlers.values()}  # mapped and decodable
+        selected = self._kinds()  # mapped and decodable
+        if Kind.BEHAVIOR_STATUS in selected and not selected & {
+            Kind.ACTION_STATUS,
+            Kind.ACTION_RESULT,
+        }:
+            notes.append(
+                "the bag has behavior status but no action status or results: every "
+                "behavior going back to IDLE is reconstructed as inhibited (outcomes unknown)"
+            )
+        if Kind.BEHAVIOR_STATUS not in selected and selected & {
+            Kind.ACTION_STATUS,
+            Kind.ACTION_RESULT,
+        }:
+            notes.append(
+                "the bag has action status or results but no behavior status (recorded "
+                "with --include-hidden-topics): each activation is reconstructed at its end "
+                "(durations unknown)"
+            )
         if Kind.ACTIVE_BEHAVIORS in selected and Kind.BEHAVIOR_EVENT not in selected:
             notes.append(
                 "the bag has active-behavior lists but no behavior events: every behavior "
@@ -472,14 +579,14 @@ class _Import:
 
 
 def _metadata(
-    bag: BagFile, mapping: Mapping, drone: str, mapped: dict[str, str]
+    bag: Bag, mapping: Mapping, drone: str, mapped: dict[str, str]
 ) -> dict[str, dict[str, str]]:
     return {
         METADATA_NAME: {
             "aeroexec_version": __version__,
             "drone": drone,
             "clock": CLOCK,
-            "vehicle": VEHICLE,
+            "vehicle": VEHICLES[bag.ros_version],
             "source": Path(bag.name).name,
             "mapping": mapping.source,
             "grace_s": f"{mapping.grace_ns / _NS:g}",
@@ -488,9 +595,9 @@ def _metadata(
             # "no capability list in the bag"
             "mapped_kinds": ",".join(sorted(mapped)),
         },
-        BAG_METADATA: {
+        BAG_METADATAS[bag.ros_version]: {
             "file": Path(bag.name).name,
-            "format": "2.0",
+            "format": bag.format,
             "bytes": str(bag.size),
             "compression": bag.compression_text,
             "chunks": str(bag.chunk_count),
@@ -509,27 +616,35 @@ def import_bag(
     drone: str | None = None,
     compression: str = "lz4",
     progress: ProgressFactory | None = None,
+    types_dir: str | os.PathLike[str] | None = None,
 ) -> ImportReport:
     """Import `bag_path` into the MCAP file `output` (see the module docstring).
-    `mapping`: a `Mapping`, a mapping file, or None for the shipped Aerostack one;
+    `mapping`: a `Mapping`, a mapping file, or None for the shipped one (Aerostack's for
+    a ROS 1 bag, Aerostack2's for a ROS 2 one); `types_dir`: `.msg`/`.srv`/`.action`
+    folders for a ROS 2 bag without definitions;
     `drone`: the namespace (default: the mapping's); `progress(name, messages)`: told the
     bag messages as they are imported (a progress bar). `RecordingError` (one line) when
     the bag, the mapping or the output cannot be used; then no output file is left."""
     if compression not in COMPRESSIONS:
         raise ValueError(f"compression must be one of {COMPRESSIONS}")
+    version = ros_version_of(bag_path)
     if not isinstance(mapping, Mapping):
-        mapping = load_mapping(mapping)
+        mapping = load_mapping(mapping, version)
     drone = check_drone(drone if drone is not None else mapping.drone, Mark("--drone"))
-    if f"/{drone}" == RAW_PREFIX:
+    if f"/{drone}" in RAW_PREFIXES.values():
         raise RecordingError(f"drone {drone!r} is reserved for the raw channels", Mark("--drone"))
+    if types_dir is not None and version != 2:
+        raise RecordingError(
+            "--types is for ROS 2 bags (a ROS 1 bag carries its definitions)", Mark(str(types_dir))
+        )
     target = Path(output)
-    with open_bag(bag_path) as bag:
+    with open_bag(bag_path, types_dir) as bag:
         if target.exists() and target.resolve() == bag.path.resolve():
             raise RecordingError("the output would overwrite the bag", Mark(str(output)))
         # Written beside the target, renamed into place only when complete (and created
         # like any other file: 0666 less the umask, not mkstemp's 0600).
         with whole_file_or_none(target) as temp, open(temp, "wb") as stream:
-            sink = ImportSink(stream, drone, compression)
+            sink = ImportSink(stream, drone, compression, bag.ros_version)
             run = _Import(bag, mapping, drone, sink)
             sink.start(
                 _metadata(bag, mapping, drone, run.mapped),
@@ -555,5 +670,6 @@ def import_bag(
             derived=dict(sink.derived),
             reconstructed_activations=stats.activations,
             reconstructed_inhibitions=stats.inhibitions,
-            notes=tuple(run.final_notes()),
+            notes=tuple(getattr(bag, "notes", ())) + tuple(run.final_notes()),
+            ros_version=bag.ros_version,
         )

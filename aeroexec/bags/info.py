@@ -1,4 +1,5 @@
-"""`aeroexec info BAG`: a ROS 1 bag summarized in the same report as an MCAP recording.
+"""`aeroexec info BAG`: a ROS 1 or ROS 2 bag summarized in the same report as an MCAP
+recording.
 
 Topics with their ROS 1 types and message counts, time span, compression, chunk and
 connection counts from the bag's index; every chunk is then read (decompressed, with its
@@ -13,20 +14,24 @@ from __future__ import annotations
 
 import os
 
-from aeroexec.bags.bagfile import BagConnection, BagFile, open_bag
+from aeroexec.bags.bagfile import BagConnection
+from aeroexec.bags.source import Bag, open_bag
 from aeroexec.errors import RecordingError
 from aeroexec.recording.info import ChannelSummary, InfoReport
 
 PROFILE = "ros1"
 LIBRARY = "rosbag v2.0"
 METADATA_NAME = "ros1_bag"
+#: By ROS version: the profile, the metadata name, the message encoding.
+PROFILES = {1: PROFILE, 2: "ros2"}
+METADATA_NAMES = {1: METADATA_NAME, 2: "ros2_bag"}
 
 
 def _types(connections: list[BagConnection]) -> str:
-    return ", ".join(dict.fromkeys(c.type for c in connections))
+    return ", ".join(dict.fromkeys(c.schema_name or c.type for c in connections))
 
 
-def _first_damage(bag: BagFile) -> str | None:
+def _first_damage(bag: Bag) -> str | None:
     """Decompress every chunk (messages are not decoded): the first damage, or None."""
     try:
         for _ in bag.messages():
@@ -38,7 +43,7 @@ def _first_damage(bag: BagFile) -> str | None:
 
 def bag_info(path: str | os.PathLike[str]) -> InfoReport:
     """The summary of the bag at `path` (`RecordingError`, one line, if it is not a
-    readable ROS 1 bag)."""
+    readable bag)."""
     with open_bag(path) as bag:
         by_topic: dict[str, list[BagConnection]] = {}
         for connection in bag.connections:
@@ -47,15 +52,15 @@ def bag_info(path: str | os.PathLike[str]) -> InfoReport:
             ChannelSummary(
                 id=group[0].id,
                 topic=topic,
-                message_encoding="ros1",
+                message_encoding=group[0].encoding,
                 schema_name=_types(group),
                 messages=sum(c.count for c in group),
             )
             for topic, group in sorted(by_topic.items())
         )
         metadata = {
-            METADATA_NAME: {
-                "format": "2.0",
+            METADATA_NAMES[bag.ros_version]: {
+                "format": bag.format,
                 "bytes": str(bag.size),
                 "compression": bag.compression_text,
                 "chunks": str(bag.chunk_count),
@@ -64,9 +69,11 @@ def bag_info(path: str | os.PathLike[str]) -> InfoReport:
             }
         }
         notes = [
-            "a ROS 1 bag: `aeroexec import` converts it to an aeroexec recording "
-            "(`aeroexec replay` takes it directly)"
+            f"a ROS {bag.ros_version} bag: `aeroexec import` converts it to an aeroexec "
+            "recording (`aeroexec replay` takes it directly)"
         ]
+        if bag.ros_version == 2:
+            notes.extend(bag.notes)  # type: ignore[union-attr]
         # The index alone would call a bag complete whose chunks `import` then refuses
         # (an lz4 checksum, a message where the index says none is): read them all.
         problem = _first_damage(bag)
@@ -77,8 +84,8 @@ def bag_info(path: str | os.PathLike[str]) -> InfoReport:
             )
         return InfoReport(
             file=bag.name,
-            profile=PROFILE,
-            library=LIBRARY,
+            profile=PROFILES[bag.ros_version],
+            library=LIBRARY if bag.ros_version == 1 else f"{bag.format} {bag.distro}".strip(),
             complete=problem is None,
             problem=problem,
             messages=bag.message_count,

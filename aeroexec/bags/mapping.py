@@ -12,9 +12,12 @@ has Aerostack's 2017-2018 names)::
       - {topic: "/{drone}/EstimatedPose_droneGMR_wrt_GFF", kind: pose}
       - {type: geometry_msgs/PoseStamped, kind: pose}      # any topic of this type
 
-A rule names a `topic` (exact, after `{drone}` is replaced), a ROS 1 `type`, or both.
-For each kind the **first rule that the bag has** is used and the later ones of that kind
-are ignored, so a mapping can list fallbacks in order of preference. Every topic of the
+A rule names a `topic` (exact, after `{drone}` is replaced), a `type` (`pkg/Name`), or
+both. For each kind the **first rule that the bag has** is used and the later ones of
+that kind are ignored, so a mapping can list fallbacks in order of preference. A topic
+with `*` segments (`/{drone}/*/_behavior/behavior_status`) takes every topic it matches,
+and the first `*` names the behavior or service (Aerostack2: one status topic per
+behavior node). ROS 2 bags default to `aerostack2.yaml`. Every topic of the
 bag is carried over unchanged whatever the mapping says; the mapping only adds the
 aeroexec channels derived from it.
 """
@@ -39,6 +42,8 @@ DEFAULT_GRACE_S = 0.5
 #: vehicle/state at most every 0.1 s of bag time: the executive's own tick (10 Hz).
 DEFAULT_STATE_PERIOD_S = 0.1
 DEFAULT_MAPPING_NAME = "aerostack.yaml"
+#: The default mapping of a ROS 2 bag: Aerostack2's names.
+DEFAULT_ROS2_MAPPING_NAME = "aerostack2.yaml"
 
 
 class Kind(str, Enum):
@@ -55,6 +60,12 @@ class Kind(str, Enum):
     VELOCITY = "velocity"  # -> vehicle/state velocity
     BATTERY = "battery"  # -> vehicle/state battery
     FLIGHT_STATUS = "flight_status"  # -> vehicle/state flying
+    # ROS 2 (Aerostack2): one topic per behavior or service, named by the `*` of the rule
+    BEHAVIOR_STATUS = "behavior_status"  # IDLE/RUNNING/PAUSED -> active list (+ reconstruction)
+    ACTION_STATUS = "action_status"  # GoalStatusArray -> end events (outcome)
+    ACTION_GOAL = "action_goal"  # send_goal service events -> activation arguments
+    ACTION_RESULT = "action_result"  # get_result service events -> end events (outcome)
+    SERVICE_EVENTS = "service_events"  # any `_service_event` topic -> service calls
 
 
 _RULE_KEYS = ("topic", "type", "kind")
@@ -71,9 +82,23 @@ class Rule:
     def topic_for(self, drone: str) -> str | None:
         return None if self.topic is None else self.topic.replace("{drone}", drone)
 
-    def matches(self, topic: str, ros1_type: str, drone: str) -> bool:
+    @property
+    def is_pattern(self) -> bool:
+        """A topic with `*` segments: it takes every topic it matches."""
+        return self.topic is not None and "*" in self.topic
+
+    def label(self, topic: str, drone: str) -> str | None:
+        """What the first `*` of a pattern matched in `topic` (the behavior's node name,
+        the service's name); None when `topic` does not match."""
         wanted = self.topic_for(drone)
-        if wanted is not None and wanted != topic:
+        if wanted is None:
+            return ""
+        if not self.is_pattern:
+            return "" if wanted == topic else None
+        return _match_segments(wanted, topic)
+
+    def matches(self, topic: str, ros1_type: str, drone: str) -> bool:
+        if self.label(topic, drone) is None:
             return False
         return self.type is None or self.type == ros1_type
 
@@ -106,17 +131,49 @@ class Mapping:
         return chosen
 
 
-def default_mapping_path() -> Path:
-    return Path(
-        str(resources.files("aeroexec").joinpath("data", "bag_mapping", DEFAULT_MAPPING_NAME))
-    )
+def _match_segments(pattern: str, topic: str) -> str | None:
+    """`/d/*/_behavior/behavior_status` against a topic: the first `*`'s segment. A `*`
+    matches one whole segment; a `**` segment any number of them (a service name
+    with a namespace: `/**/_service_event`)."""
+    want = pattern.split("/")
+    have = topic.split("/")
+    if "**" in want:
+        at = want.index("**")
+        head, tail = want[:at], want[at + 1 :]
+        if len(have) < len(head) + len(tail) + 1:
+            return None
+        if _match_segments("/".join(head), "/".join(have[: len(head)])) is None:
+            return None
+        if (
+            tail
+            and _match_segments("/".join(tail), "/".join(have[len(have) - len(tail) :])) is None
+        ):
+            return None
+        return "/".join(have[len(head) : len(have) - len(tail)])
+    if len(want) != len(have):
+        return None
+    label: str | None = None
+    for w, h in zip(want, have, strict=True):
+        if w == "*":
+            if not h:
+                return None
+            label = h if label is None else label
+        elif w != h:
+            return None
+    return label or ""
 
 
-def load_mapping(path: str | os.PathLike[str] | None = None) -> Mapping:
-    """The mapping in `path` (the shipped Aerostack default when None). `RecordingError`
-    with file:line:col for anything wrong in it."""
-    file = Path(path) if path is not None else default_mapping_path()
-    name = str(path) if path is not None else DEFAULT_MAPPING_NAME
+def default_mapping_path(ros_version: int = 1) -> Path:
+    name = DEFAULT_MAPPING_NAME if ros_version == 1 else DEFAULT_ROS2_MAPPING_NAME
+    return Path(str(resources.files("aeroexec").joinpath("data", "bag_mapping", name)))
+
+
+def load_mapping(path: str | os.PathLike[str] | None = None, ros_version: int = 1) -> Mapping:
+    """The mapping in `path` (when None, the shipped default: Aerostack's for a ROS 1
+    bag, Aerostack2's for a ROS 2 one). `RecordingError` with file:line:col for anything
+    wrong in it."""
+    file = Path(path) if path is not None else default_mapping_path(ros_version)
+    name = str(path) if path is not None else file.name
     try:
         text = read_text(file, "a mapping file", RecordingError)
     except RecordingError as exc:  # named as the user named it (or as the default)

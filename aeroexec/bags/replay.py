@@ -1,4 +1,4 @@
-"""A ROS 1 bag as a temporary aeroexec recording, for the tools that read recordings only.
+"""A ROS 1 or ROS 2 bag as a temporary aeroexec recording, for the tools that read recordings only.
 
 `bag_recording` is the bridge any caller can use (`with bag_recording("flight.bag") as
 imported: ...`): `aeroexec.replay.engine.replay_bag` replays a bag through it (open loop

@@ -1,12 +1,15 @@
 """The MCAP side of an import: an aeroexec-profile file with two kinds of channels.
 
 * Raw channels, one per bag connection, topic `/ros1<original topic>` (e.g.
-  `/ros1/drone1/behavior_event`): schema encoding `ros1msg` (the connection's message
-  definition, named with its ROS 1 type), message encoding `ros1`, the serialized bytes
-  exactly as in the bag; channel metadata `topic` (the original name), `md5sum`,
-  `callerid` and `latching` when the bag has them. The prefix keeps them apart from the
-  aeroexec channels, several of which have Aerostack's own names
-  (`/drone1/behavior_event`), while Foxglove and `mcap` still decode them as ROS 1.
+  `/ros1/drone1/behavior_event`) for a ROS 1 bag, `/ros2<original topic>` for a ROS 2
+  one: the connection's definition as schema (ROS 1: encoding `ros1msg`, named with its
+  ROS 1 type; ROS 2: `ros2msg` or `ros2idl`, named `pkg/msg/Name`, the full
+  concatenated text), message encoding `ros1` or `cdr`, the serialized bytes exactly as
+  in the bag; channel metadata `topic` (the original name), ROS 1's `md5sum`,
+  `callerid` and `latching`, ROS 2's `offered_qos_profiles` and `topic_type_hash`, when
+  the bag has them. The prefix keeps them apart from the aeroexec channels, several of
+  which have Aerostack's own names (`/drone1/behavior_event`), while Foxglove and `mcap`
+  still decode them.
 * aeroexec channels `/<drone>/<name>` with the profile's JSON Schemas (what the
   `Recorder` writes; see aeroexec/recording/schemas.py).
 
@@ -35,8 +38,7 @@ from aeroexec.recording.schemas import (
 from aeroexec.recording.writer import LIBRARY, METADATA_NAME, encode_json
 
 RAW_PREFIX = "/ros1"
-RAW_SCHEMA_ENCODING = "ros1msg"
-RAW_MESSAGE_ENCODING = "ros1"
+RAW_PREFIXES = {1: "/ros1", 2: "/ros2"}
 _COMPRESSION_TYPES = {
     "lz4": CompressionType.LZ4,
     "zstd": CompressionType.ZSTD,
@@ -56,14 +58,17 @@ def writer_options(compression: str) -> dict[str, Any]:
     return {"chunk_size": CHUNK_SIZE, "compression": _COMPRESSION_TYPES[compression]}
 
 
-def raw_topic(topic: str) -> str:
-    return RAW_PREFIX + topic
+def raw_topic(topic: str, ros_version: int = 1) -> str:
+    return RAW_PREFIXES[ros_version] + topic
 
 
 class ImportSink:
-    def __init__(self, stream: IO[bytes], drone: str, compression: str = "lz4") -> None:
+    def __init__(
+        self, stream: IO[bytes], drone: str, compression: str = "lz4", ros_version: int = 1
+    ) -> None:
         if compression not in COMPRESSIONS:
             raise ValueError(f"compression must be one of {COMPRESSIONS}")
+        self._ros_version = ros_version
         self._writer = Writer(stream, **writer_options(compression))
         self._prefix = f"/{drone}/"
         self._schemas: dict[tuple[str, str, bytes], int] = {}
@@ -97,16 +102,26 @@ class ImportSink:
     def raw_channel(self, connection: BagConnection) -> int:
         channel = self._raw.get(connection.id)
         if channel is None:
-            schema = self._schema(
-                connection.type, RAW_SCHEMA_ENCODING, connection.msgdef.encode("utf-8")
-            )
-            metadata = {"topic": connection.topic, "md5sum": connection.md5sum}
+            schema = 0  # none: a ROS 2 type without any known definition
+            if connection.schema_encoding:
+                schema = self._schema(
+                    connection.schema_name or connection.type,
+                    connection.schema_encoding,
+                    connection.msgdef.encode("utf-8"),
+                )
+            metadata = {"topic": connection.topic}
+            if connection.md5sum:
+                metadata["md5sum"] = connection.md5sum
             if connection.callerid is not None:
                 metadata["callerid"] = connection.callerid
             if connection.latching is not None:
                 metadata["latching"] = "true" if connection.latching else "false"
+            metadata.update(connection.extra)
             channel = self._writer.register_channel(
-                raw_topic(connection.topic), RAW_MESSAGE_ENCODING, schema, metadata
+                raw_topic(connection.topic, self._ros_version),
+                connection.encoding,
+                schema,
+                metadata,
             )
             self._raw[connection.id] = channel
         return channel

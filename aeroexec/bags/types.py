@@ -28,7 +28,8 @@ import functools
 from dataclasses import dataclass
 from importlib import resources
 
-from rosbags.typesys import Stores, get_typestore
+from rosbags.interfaces.typing import Typesdict
+from rosbags.typesys import Stores, get_types_from_idl, get_typestore
 from rosbags.typesys.base import make_typesdict
 from rosbags.typesys.msg import MSGParser
 from rosbags.typesys.store import Typestore
@@ -45,11 +46,13 @@ class _LenientParser(MSGParser):  # type: ignore[misc]
     PackageName = MSGParser.MixedSnake
 
 
-def ros2_name(ros1_type: str) -> str:
-    """`droneMsgsROS/BehaviorEvent` -> `droneMsgsROS/msg/BehaviorEvent` (rosbags' names)."""
-    package, _, name = ros1_type.rpartition("/")
-    if package.endswith("/msg"):
-        return ros1_type
+def ros2_name(type_name: str) -> str:
+    """The name a type is registered and decoded under: `droneMsgsROS/BehaviorEvent` ->
+    `droneMsgsROS/msg/BehaviorEvent` (rosbags' names); a ROS 2 service or action type
+    (`example_interfaces/srv/AddTwoInts_Event`) under `/msg/` too, where rosbags'
+    definition generator wants every type."""
+    package = type_name.split("/", 1)[0]
+    name = type_name.rsplit("/", 1)[-1]
     return f"{package}/msg/{name}"
 
 
@@ -63,6 +66,19 @@ def parse_msgdef(text: str, msgtype: str) -> dict[str, object]:
 
     Raises rosbags' `TypesysError` when the text is not a message definition."""
     return make_typesdict(_LenientParser(f"MSG: {ros2_name(msgtype)}\n{text}").specification())  # type: ignore[no-any-return]
+
+
+def idl_types(text: str) -> Typesdict:
+    """The types of a `ros2idl` definition: one IDL text, or several, each after a
+    `====...` line and an `IDL: pkg/msg/Name` line (rosbag2's MCAP writer)."""
+    separator = "=" * 80 + "\n"
+    if not text.startswith(f"{separator}IDL: "):
+        return get_types_from_idl(text)
+    types: Typesdict = {}
+    for part in text.split(separator)[1:]:
+        _, idl = part.split("\n", 1)
+        types.update(get_types_from_idl(idl))
+    return types
 
 
 def shipped_definitions() -> dict[str, str]:
@@ -109,7 +125,12 @@ class Decoder:
     #: Why the definition is doubtful ("" when it matches the bag's md5sum or is the bag's).
     warning: str = ""
 
+    #: ROS 2 (CDR) rather than ROS 1 serialization.
+    cdr: bool = False
+
     def decode(self, data: bytes | memoryview) -> object:
+        if self.cdr:
+            return self.store.deserialize_cdr(data, self.msgtype)
         return self.store.deserialize_ros1(data, self.msgtype)
 
 
@@ -119,9 +140,21 @@ class TypeResolver:
     def __init__(self) -> None:
         self._by_text: dict[tuple[str, str], Typestore] = {}
 
-    def decoder(self, msgtype: str, msgdef: str, md5sum: str) -> Decoder:
+    def decoder(
+        self, msgtype: str, msgdef: str, md5sum: str, schema_encoding: str = "ros1msg"
+    ) -> Decoder:
         """A decoder for a connection of `msgtype` (rosbags' `pkg/msg/Name`). Raises
-        `ValueError` with the reason when the type cannot be decoded."""
+        `ValueError` with the reason when the type cannot be decoded. A ROS 2 connection
+        (`ros2msg`, `ros2idl`) always carries its definition by then (the bag's, or the
+        one aeroexec completed: see `Ros2Types`)."""
+        if schema_encoding in ("ros2msg", "ros2idl"):
+            if not msgdef.strip():
+                raise ValueError(
+                    f"{msgtype}: the bag has no definition for it and aeroexec knows none"
+                )
+            name = ros2_name(msgtype)
+            store = _store_from_text(name, msgdef, schema_encoding)
+            return Decoder(store, name, "bag", cdr=True)
         if msgdef.strip():
             return Decoder(self._from_text(msgtype, msgdef), msgtype, "bag")
         store = _shipped_store()
@@ -150,7 +183,7 @@ class TypeResolver:
 
 
 @functools.lru_cache(maxsize=256)
-def _store_from_text(msgtype: str, msgdef: str) -> Typestore:
+def _store_from_text(msgtype: str, msgdef: str, encoding: str = "ros1msg") -> Typestore:
     """A store that decodes `msgtype` as `msgdef` defines it. Kept for the process:
     building the (de)serializers is rosbags' code generation (~5 ms a type, more than
     reading a small bag), and a fleet of bags repeats the same definitions. Keyed by the
@@ -159,7 +192,10 @@ def _store_from_text(msgtype: str, msgdef: str) -> Typestore:
     raises each time (lru_cache keeps no exceptions)."""
     store = get_typestore(Stores.EMPTY)
     try:
-        store.register(parse_msgdef(msgdef, msgtype))  # type: ignore[arg-type]
+        if encoding == "ros2idl":
+            store.register(idl_types(msgdef))
+        else:
+            store.register(parse_msgdef(msgdef, msgtype))  # type: ignore[arg-type]
         store.get_msgdef(msgtype)  # generate the (de)serializers now: fail here
     except Exception as exc:  # TypesysError, KeyError for a missing sub-type...
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__

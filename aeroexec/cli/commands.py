@@ -76,7 +76,8 @@ COMMANDS: dict[str, CommandEntry] = {
         "Work with replay reports: merge the shards of a CI matrix into one.",
     ),
     "import": CommandEntry(
-        "import_cmd", "Convert a ROS 1 bag into an aeroexec recording (MCAP), losing nothing."
+        "import_cmd",
+        "Convert a ROS 1 or ROS 2 bag into an aeroexec recording (MCAP), losing nothing.",
     ),
     "behaviors": CommandEntry(
         "behaviors_cmd",

@@ -8,9 +8,9 @@ from typing import Annotated, Any
 
 import typer
 
-from aeroexec.bags.bagfile import is_bag
-from aeroexec.bags.info import PROFILE as BAG_PROFILE
+from aeroexec.bags.info import PROFILES as BAG_PROFILES
 from aeroexec.bags.info import bag_info
+from aeroexec.bags.source import is_bag
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.options import format_option, output_option
 from aeroexec.recording.info import recording_info
@@ -36,7 +36,8 @@ def info(
         str,
         typer.Argument(
             metavar="REC",
-            help="An MCAP file (aeroexec or any other profile) or a ROS 1 bag.",
+            help="An MCAP file (aeroexec or any other profile), a ROS 1 bag or a ROS 2 "
+            "bag (a rosbag2 directory or a .db3).",
             show_default=False,
         ),
     ],
@@ -65,7 +66,7 @@ def info(
         typer.echo(_limit_behaviors(report.to_text(), len(report.behaviors)))
     if report.damages:
         error_line(f"{report.file}: warning: damaged recording: {report.problem}")
-    elif not report.complete and report.profile == BAG_PROFILE:
+    elif not report.complete and report.profile in BAG_PROFILES.values():
         error_line(f"{report.file}: warning: damaged bag: {report.problem}")
     elif not report.complete:
         error_line(

@@ -144,8 +144,8 @@ def replay(
         list[str],
         typer.Argument(
             metavar="REC...",
-            help="Recordings (.mcap, ROS 1 .bag), directories (every *.mcap and *.bag "
-            "inside) or quoted globs.",
+            help="Recordings (.mcap, ROS 1 .bag, ROS 2 bags: a rosbag2 directory, a .db3, "
+            "a ros2 .mcap), directories (every *.mcap and *.bag inside) or quoted globs.",
             show_default=False,
         ),
     ],

@@ -58,7 +58,7 @@ def view(
         Path,
         typer.Argument(
             metavar="REC",
-            help="An aeroexec recording (MCAP) or a ROS 1 bag (imported on the way).",
+            help="An aeroexec recording (MCAP) or a ROS 1 or ROS 2 bag (imported on the way).",
             show_default=False,
         ),
     ],
@@ -111,8 +111,9 @@ def view(
     timeline (service calls also on `seq`).
 
     With REC2, both sessions sit side by side (under /base and /new), aligned on sim_time:
-    a base run and its replay under a new catalog, say. A ROS 1 bag is imported first
-    (the shipped Aerostack mapping; `aeroexec import --mapping` for others).
+    a base run and its replay under a new catalog, say. A ROS 1 or ROS 2 bag is imported
+    first (the shipped Aerostack or Aerostack2 mapping; `aeroexec import --mapping` for
+    others).
 
     The Rerun file is written to -o/--output, or next to REC (<REC stem>.rrd; two recordings:
     <REC stem>_vs_<REC2 stem>.rrd). The viewer opens on it when it can run (the rerun

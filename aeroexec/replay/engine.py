@@ -21,8 +21,8 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
-from aeroexec.bags.bagfile import is_bag
 from aeroexec.bags.replay import bag_recording
+from aeroexec.bags.source import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
 from aeroexec.errors import AeroexecError, CatalogError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
@@ -222,13 +222,22 @@ def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:
 
 
 def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
-    """`replay_recording` for a bag (imported with the shipped Aerostack mapping)."""
+    """`replay_recording` for a bag (imported with the shipped mapping: Aerostack's for a
+    ROS 1 bag, Aerostack2's for a ROS 2 one). An Aerostack2 flight has no catalog of its
+    own: the replay runs its behavior timeline (the reconstructed activations, with the
+    goals as arguments, each ending as recorded) against the `--catalog` given."""
     with bag_recording(path) as imported:
         if not imported.report.derived.get("mission/command"):
-            raise RecordingError(
-                "no behavior commands to replay: the bag has none of the behavior topics "
+            known = (
                 "the Aerostack mapping knows (behavior_event, list_of_active_behaviors, "
-                "command topics); `aeroexec import --mapping` then replay the .mcap",
+                "command topics)"
+                if imported.report.ros_version == 1
+                else "the Aerostack2 mapping knows (<ns>/<Behavior>/_behavior/behavior_status: "
+                "rosbag2 records it only with --include-hidden-topics)"
+            )
+            raise RecordingError(
+                f"no behavior commands to replay: the bag has none of the behavior topics "
+                f"{known}; `aeroexec import --mapping` then replay the .mcap",
                 Mark(str(path)),
             )
         try:
@@ -240,9 +249,13 @@ def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayRe
         imported.report.reconstructed_activations + imported.report.reconstructed_inhibitions
     )
     if reconstructed:
-        notes.append(
-            f"{reconstructed} of the recorded commands were reconstructed from the bag's "
+        source = (
             "active-behavior list (bags hold no service calls)"
+            if imported.report.ros_version == 1
+            else "behavior status (Aerostack2 starts behaviors with action goals)"
+        )
+        notes.append(
+            f"{reconstructed} of the recorded commands were reconstructed from the bag's {source}"
         )
     return replace(result, recording=str(path), notes=(*result.notes, *notes))
 

@@ -1,6 +1,7 @@
 """Which recordings a command line names: files, directories (every `*.mcap` and ROS 1
-`*.bag` inside, sorted) and glob patterns (sorted matches), in the order given; the same
-for URLs (`s3://bucket/flights/`, through fsspec: aeroexec.replay.remote)."""
+`*.bag` inside, sorted; a rosbag2 directory, with its `metadata.yaml`, is one ROS 2
+bag) and glob patterns (sorted matches), in the order given; the same for URLs
+(`s3://bucket/flights/`, through fsspec: aeroexec.replay.remote)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from aeroexec.replay.remote import expand_url, is_url
 _GLOB_CHARS = frozenset("*?[")
 #: What a directory contributes.
 SUFFIXES = (".mcap", ".bag")
+#: What makes a directory one rosbag2 bag rather than a folder of recordings.
+ROSBAG2_METADATA = "metadata.yaml"
 EMPTY_DIRECTORY = "no *.mcap recordings in this directory (nor ROS 1 *.bag)"
 
 
@@ -33,7 +36,9 @@ def expand_inputs(arguments: list[str]) -> list[Input]:
             )
             continue
         path = Path(argument)
-        if path.is_dir():
+        if path.is_dir() and (path / ROSBAG2_METADATA).is_file():
+            out.append(Input(argument))  # a ROS 2 bag: one recording, imported first
+        elif path.is_dir():
             found = sorted(
                 str(p) for p in path.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file()
             )

@@ -82,8 +82,8 @@ class _Source:
 
 @contextmanager
 def _opened(path: Path) -> Iterator[_Source]:
-    """The recording of `path`: itself, or for a ROS 1 bag a temporary import of it."""
-    from aeroexec.bags.bagfile import is_bag
+    """The recording of `path`: itself, or for a ROS 1 or ROS 2 bag a temporary import."""
+    from aeroexec.bags.source import is_bag
 
     if not is_bag(path):
         yield _Source(str(path), open_session(path))
@@ -92,8 +92,9 @@ def _opened(path: Path) -> Iterator[_Source]:
 
     with bag_recording(path) as imported:
         if not imported.report.derived:
+            mapping = "Aerostack" if imported.report.ros_version == 1 else "Aerostack2"
             raise RecordingError(
-                "nothing to show: the bag has none of the topics the Aerostack mapping knows "
+                f"nothing to show: the bag has none of the topics the {mapping} mapping knows "
                 "(poses, behavior and resource topics); `aeroexec import --mapping` then view "
                 "the .mcap",
                 Mark(str(path)),
@@ -122,13 +123,19 @@ def open_session(path: str | os.PathLike[str], *, shown_as: str | None = None) -
 
 
 def recording_id_for(paths: Sequence[str | os.PathLike[str]]) -> str:
-    """A UUID derived from the inputs' bytes (and their order)."""
+    """A UUID derived from the inputs' bytes (and their order; a ROS 2 bag directory:
+    its files' names and bytes, in name order)."""
     digest = hashlib.sha256(b"aeroexec view\0")
     for path in paths:
         file_hash = hashlib.sha256()
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                file_hash.update(block)
+        folder = Path(path)
+        files = sorted(p for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else [folder]
+        for file in files:
+            if file is not folder:
+                file_hash.update(str(file.relative_to(folder)).encode() + b"\0")
+            with open(file, "rb") as f:
+                for block in iter(lambda f=f: f.read(1 << 20), b""):
+                    file_hash.update(block)
         digest.update(file_hash.digest())
     return str(uuid.UUID(bytes=digest.digest()[:16], version=4))
 
