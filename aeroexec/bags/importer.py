@@ -314,7 +314,7 @@ class _Import:
         reconstructing = self.reconstructing
         decide_after = 2 * recon.grace  # an input is decided once this much later is read
         direct = True  # nothing held: a message may be written as it comes
-        poses = any(kind is Kind.POSE for kind, _ in handlers.values())  # a vehicle to draw
+        poses = Kind.POSE in self._kinds()  # a vehicle to draw
         count = 0
         for connection, time_ns, data in self.bag.messages():
             count += 1
