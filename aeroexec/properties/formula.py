@@ -1,0 +1,293 @@
+"""Formulas in RTAMT's signal temporal logic: checked, parsed and evaluated.
+
+RTAMT (https://github.com/nickovic/rtamt) gives the language and its offline discrete-time
+semantics. aeroexec adds three things around it (docs/properties.md#the-engine):
+
+* **Nothing in a formula runs.** RTAMT's specification language also has declarations,
+  and `from MODULE import TYPE` imports a Python module. A formula is lexed with RTAMT's
+  own lexer first and may hold only the tokens of an expression (operators, numbers, time
+  units, known signal names); anything else is an error at its column, before the parser
+  sees it.
+* **Verdicts by Boolean semantics, robustness by the quantitative one.** With 0/1 signals
+  the robustness of a satisfied comparison on its boundary (`landed >= 1` while landed)
+  is 0, the same as a violated one's negation, so the sign of the robustness cannot say
+  whether `fault_x >= 1 implies eventually[0:30](landed >= 1)` held. A second pass with
+  each comparison mapped to +1/-1 (RTAMT's own operators on top) decides it.
+* **The first violating interval**: for `always(body)`, the first run of samples where the
+  body is false; for any other formula, the whole session when it is false at 0.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from aeroexec.errors import Mark, PropertyError
+from aeroexec.properties.signals import PERIOD_NS, PERIOD_S
+
+#: Tokens an expression may hold (RTAMT's lexer's symbolic names).
+_ALLOWED_TOKENS = frozenset(
+    """MINUS PLUS TIMES DIVIDE LPAREN RPAREN LBRACK RBRACK COLON COMMA ABS SQRT EXP POW
+    SEC MSEC USEC NSEC NotOperator OrOperator AndOperator IffOperator ImpliesOperator
+    XorOperator RiseOperator FallOperator AlwaysOperator EventuallyOperator UntilOperator
+    UnlessOperator HistoricallyOperator OnceOperator SinceOperator NextOperator
+    PreviousOperator EqualOperator NotEqualOperator GreaterOrEqualOperator
+    LesserOrEqualOperator GreaterOperator LesserOperator BooleanLiteral TRUE FALSE
+    IntegerLiteral RealLiteral Identifier WHITESPACE LINE_TERMINATOR""".split()
+)
+_RTAMT_ERROR = re.compile(r"(\d+):(\d+):\s*(.*)", re.S)
+
+
+@dataclass(frozen=True, slots=True)
+class Token:
+    kind: str
+    text: str
+    column: int  # 0-based, in the formula's text
+    line: int  # 1-based, in the formula's text
+
+
+@dataclass(frozen=True, eq=False)
+class Formula:
+    """A parsed formula. `signals`: the signal names it reads, in order of appearance."""
+
+    text: str
+    signals: tuple[str, ...]
+    mark: Mark
+    _spec: Any = field(repr=False)
+    _boolean: Any = field(repr=False)
+
+    @property
+    def top(self) -> Any:
+        return self._spec.ast.specs[0]
+
+    def horizon_s(self) -> float | None:
+        """How far past a sample the body of a top-level `always` looks (None: without
+        bound, or the formula is not an `always`): a violation at sample k is final once
+        the session has reached k + horizon."""
+        top = self.top
+        if type(top).__name__ != "Always":
+            return None
+        return _future(top.children[0])
+
+    def evaluate(self, columns: Mapping[str, Sequence[float]], length: int) -> Outcome:
+        """Evaluate on `length` samples of every signal in `signals`."""
+        dataset: dict[str, Any] = {"time": [k * PERIOD_S for k in range(length)]}
+        for name in self.signals:
+            dataset[name] = list(columns[name])  # RTAMT may extend what it is given
+        with _quiet():
+            robustness = self._spec.evaluate(dict(dataset))
+            for name in self.signals:
+                dataset[name] = list(columns[name])
+            self._boolean.evaluate(dataset)
+        results = self._spec.ast.offline_results  # the Boolean pass's, per node
+        top = self.top
+        rob = float(robustness[0][1]) if robustness else 0.0
+        if type(top).__name__ == "Always":
+            series = results[top.children[0]]
+        else:
+            series = results[top][:1]
+        first = next((k for k, v in enumerate(series) if v < 0), None)
+        if first is None:
+            return Outcome(True, rob, None)
+        last = first
+        while last + 1 < len(series) and series[last + 1] < 0:
+            last += 1
+        return Outcome(False, rob, (first, last if len(series) > 1 else length - 1))
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    holds: bool
+    #: RTAMT's robustness at time 0 (how far from changing the verdict).
+    robustness: float
+    #: First and last sample of the first violating interval (None when it holds).
+    interval: tuple[int, int] | None
+
+
+def tokens(text: str) -> list[Token]:
+    """`text` lexed by RTAMT's lexer; `PropertyError` text for what it cannot lex."""
+    from antlr4 import InputStream
+    from antlr4.error.ErrorListener import ErrorListener
+    from rtamt.antlr.parser.stl.StlLexer import StlLexer
+
+    problems: list[tuple[int, int, str]] = []
+
+    class Collect(ErrorListener):  # type: ignore[misc]
+        def syntaxError(self, recognizer, symbol, line, column, msg, e):  # noqa: N802, ANN001
+            problems.append((line, column, msg))
+
+    with _quiet():
+        lexer = StlLexer(InputStream(text))
+    lexer.removeErrorListeners()
+    lexer.addErrorListener(Collect())
+    out = []
+    for token in lexer.getAllTokens():
+        kind = StlLexer.symbolicNames[token.type] if token.type > 0 else "<INVALID>"
+        out.append(Token(kind, token.text, token.column, token.line))
+    if problems:
+        line, column, msg = problems[0]
+        raise _LexError(line, column, msg.replace("token recognition error at", "unexpected"))
+    return out
+
+
+class _LexError(Exception):
+    def __init__(self, line: int, column: int, message: str) -> None:
+        super().__init__(message)
+        self.line, self.column, self.message = line, column, message
+
+
+def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Formula:
+    """Check and parse `text` (written at `mark`); `PropertyError` at the offending
+    column for anything that is not an expression over known signals."""
+    try:
+        lexed = tokens(text)
+    except _LexError as exc:
+        raise PropertyError(exc.message, _at(mark, exc.line, exc.column)) from None
+    names: list[str] = []
+    for token in lexed:
+        if token.kind not in _ALLOWED_TOKENS:
+            raise PropertyError(
+                f"'{token.text}' has no place in a formula (an expression over signals)",
+                _at(mark, token.line, token.column),
+            )
+        if token.kind == "Identifier":
+            if not known(token.text):
+                raise PropertyError(
+                    f"unknown signal '{token.text}' (the signals are listed in "
+                    "docs/properties.md)",
+                    _at(mark, token.line, token.column),
+                )
+            if token.text not in names:
+                names.append(token.text)
+    if not any(t.kind not in ("WHITESPACE", "LINE_TERMINATOR") for t in lexed):
+        raise PropertyError("empty formula", mark)
+    spec, boolean = _parse(text, names, mark)
+    formula = Formula(text, tuple(names), mark, spec, boolean)
+    try:  # bounds that are no multiple of the tick fail here, not in a check
+        formula.evaluate({n: [0.0, 0.0] for n in names}, 2)
+    except Exception as exc:  # noqa: BLE001 - RTAMT raises plain Exceptions
+        raise PropertyError(_rtamt_message(exc), mark) from None
+    return formula
+
+
+def _parse(text: str, names: Sequence[str], mark: Mark) -> tuple[Any, Any]:
+    import rtamt
+    from rtamt.semantics.abstract_discrete_time_offline_interpreter import (
+        discrete_time_offline_interpreter_factory,
+    )
+
+    spec = rtamt.StlDiscreteTimeOfflineSpecification()
+    for name in names:
+        spec.declare_var(name, "float")
+    spec.spec = text
+    spec.set_sampling_period(PERIOD_NS // 1_000_000, "ms", 0.1)
+    try:
+        with _quiet():
+            spec.parse()
+    except Exception as exc:  # noqa: BLE001 - RTAMTException and antlr's own
+        message = _rtamt_message(exc)
+        found = _RTAMT_ERROR.match(message)
+        if found:
+            line, column, rest = int(found[1]), int(found[2]), found[3]
+            raise PropertyError(_tidy(rest), _at(mark, line, column)) from None
+        raise PropertyError(_tidy(message), mark) from None
+    boolean = discrete_time_offline_interpreter_factory(_boolean_visitor())()
+    boolean.set_ast(spec.ast)
+    boolean.set_sampling_period(PERIOD_NS // 1_000_000, "ms", 0.1)
+    return spec, _BooleanSpec(boolean)
+
+
+class _BooleanSpec:
+    def __init__(self, interpreter: Any) -> None:
+        self._interpreter = interpreter
+
+    def evaluate(self, dataset: dict[str, Any]) -> Any:
+        return self._interpreter.evaluate(dataset)
+
+
+_BOOLEAN_VISITOR: type | None = None
+
+
+def _boolean_visitor() -> type:
+    """RTAMT's offline visitor with comparisons as +1 (true) / -1 (false): its min/max
+    operators then compute the Boolean semantics exactly."""
+    global _BOOLEAN_VISITOR
+    if _BOOLEAN_VISITOR is None:
+        import operator
+
+        from rtamt.semantics.stl.discrete_time.offline.ast_visitor import (
+            StlDiscreteTimeOfflineAstVisitor,
+        )
+
+        tests = {
+            "<": operator.lt,
+            "<=": operator.le,
+            "==": operator.eq,
+            "!=": operator.ne,
+            ">": operator.gt,
+            ">=": operator.ge,
+        }
+
+        class BooleanVisitor(StlDiscreteTimeOfflineAstVisitor):  # type: ignore[misc]
+            def visitPredicate(self, node, *args, **kwargs):  # noqa: N802, ANN001, ANN201
+                left = self.visit(node.children[0], *args, **kwargs)
+                right = self.visit(node.children[1], *args, **kwargs)
+                test = tests[str(node.operator)]
+                return [1.0 if test(a, b) else -1.0 for a, b in zip(left, right, strict=True)]
+
+        _BOOLEAN_VISITOR = BooleanVisitor
+    return _BOOLEAN_VISITOR
+
+
+def _future(node: Any) -> float | None:
+    """The furthest a node looks ahead, in seconds (None: unbounded)."""
+    kind = type(node).__name__
+    if kind in ("Always", "Eventually", "Until", "Unless", "Next", "StrongNext"):
+        if kind in ("Next", "StrongNext"):
+            inner = _future(node.children[0])
+            return None if inner is None else inner + PERIOD_S
+        return None
+    own = 0.0
+    if kind.startswith("Timed") and kind[5:] in ("Always", "Eventually", "Until", "Unless"):
+        own = float(node.end) * _unit_s(getattr(node, "end_unit", "") or "s")
+    deepest = 0.0
+    for child in node.children:
+        inner = _future(child)
+        if inner is None:
+            return None
+        deepest = max(deepest, inner)
+    return own + deepest
+
+
+def _unit_s(unit: str) -> float:
+    return {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}.get(unit, 1.0)
+
+
+def _at(mark: Mark, line: int, column: int) -> Mark:
+    """The place in the property file of (line, column) of the formula: exact for a
+    formula on one line after its key; the formula's own start otherwise."""
+    if mark.line <= 0:
+        return mark
+    if line <= 1:
+        return Mark(mark.file, mark.line, mark.column + column)
+    return Mark(mark.file, mark.line + line - 1, column + 1)
+
+
+def _rtamt_message(exc: BaseException) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.removeprefix("RTAMT Exception:").strip()
+
+
+def _tidy(message: str) -> str:
+    return " ".join(message.replace("Syntax ERROR,", "syntax error:").split())
+
+
+@contextlib.contextmanager
+def _quiet() -> Any:
+    """RTAMT's generated lexer prints a version warning on standard output."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        yield

@@ -1,0 +1,337 @@
+"""The signals properties speak about, and how they are sampled from a session.
+
+One extraction serves a recording (offline, `signals_from_recording`) and a running
+session (online, the monitor feeds the bus's records): both call `SignalBuilder.topic` and
+`SignalBuilder.call` with the same (name, time, data), so both produce the same samples,
+and the same evaluation gives the same verdicts.
+
+Samples sit on the executive's tick grid (`PERIOD_NS`, 10 Hz): sample k holds the state
+after every message logged in [k, k+1) ticks (zero-order hold between changes). In
+simulation every message falls on a tick; a live flight's messages are assigned to the
+tick they fall in.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+#: The executive's tick (aeroexec/executive/clock.py steps 0.1 s): one sample per tick.
+PERIOD_NS = 100_000_000
+PERIOD_S = PERIOD_NS / 1e9
+
+#: `fault_low_battery` is raised when the battery first falls below this charge (the
+#: simulator models a low battery as a level, not as a vehicle fault).
+LOW_BATTERY_LEVEL = 0.2
+
+#: Vehicle faults after which the vehicle cannot fly on: an empty battery forces a
+#: landing, a seized motor stops every motion (aeroexec/vehicles/sim.py).
+GROUNDING_FAULTS = ("battery_empty", "stuck_motor")
+
+
+@dataclass(frozen=True, slots=True)
+class SignalDoc:
+    name: str
+    unit: str
+    meaning: str
+    source: str
+
+
+#: The fixed-name signals (docs/properties.md renders this table; a test keeps it true).
+SIGNALS: tuple[SignalDoc, ...] = (
+    SignalDoc("altitude", "m", "height of the vehicle, up", "vehicle/state position z"),
+    SignalDoc("speed", "m/s", "magnitude of the velocity", "vehicle/state velocity"),
+    SignalDoc("battery", "0-1", "remaining charge", "vehicle/state battery"),
+    SignalDoc(
+        "distance_home",
+        "m",
+        "horizontal distance from the first recorded position",
+        "vehicle/state position",
+    ),
+    SignalDoc("flying", "0/1", "the vehicle is airborne", "vehicle/state flying"),
+    SignalDoc("armed", "0/1", "the motors are armed", "vehicle/state armed"),
+    SignalDoc("landed", "0/1", "not flying (1 - flying)", "vehicle/state flying"),
+    SignalDoc(
+        "link",
+        "0/1",
+        "the vehicle's link is up (0 while the fault is link_lost)",
+        "vehicle/state fault",
+    ),
+    SignalDoc(
+        "incompatible",
+        "0/1",
+        "two referenced capabilities are incompatible in the recorded catalog",
+        "list_of_active_capabilities + catalog",
+    ),
+    SignalDoc(
+        "unanswered",
+        "count",
+        "accepted activations of non-recurrent behaviors not yet ended by their event",
+        "activate_behavior, default_values, behavior_event",
+    ),
+    SignalDoc("grounded", "0/1", "a fault that makes flight impossible was seen "
+              f"({', '.join(GROUNDING_FAULTS)}), from then on", "vehicle/state fault"),
+    SignalDoc("end", "0/1", "1 at the session's last sample", "the recording's last message"),
+)
+
+#: Per-name signals: prefix -> (unit, meaning, source).
+FAMILIES: dict[str, tuple[str, str, str]] = {
+    "active_": ("0/1", "behavior B is active", "list_of_active_behaviors"),
+    "capability_": (
+        "0/1",
+        "capability C is referenced (reference count > 0)",
+        "list_of_active_capabilities",
+    ),
+    "fault_": (
+        "0/1",
+        "fault K was seen, from that moment on (K: stuck_motor, battery_empty, link_lost, "
+        f"mode_changed, not_connected; low_battery when the charge falls below "
+        f"{LOW_BATTERY_LEVEL:g})",
+        "vehicle/state fault, battery",
+    ),
+    "command_": (
+        "0/1",
+        "1 at the sample a mission command for behavior B is issued",
+        "mission/command",
+    ),
+}
+
+#: Which recorded channel each fixed signal needs (a recording without it lacks them).
+_VEHICLE = frozenset(
+    {"altitude", "speed", "battery", "distance_home", "flying", "armed", "landed", "link"}
+)
+
+
+def is_known_signal(name: str) -> bool:
+    return any(name == s.name for s in SIGNALS) or any(
+        name.startswith(prefix) and len(name) > len(prefix) for prefix in FAMILIES
+    )
+
+
+@dataclass(frozen=True)
+class Signals:
+    """Sampled signals: `values[name][k]` at time `k * PERIOD_S`; `missing[name]` says why
+    a signal the session could not give is absent."""
+
+    length: int
+    values: Mapping[str, list[float]]
+    #: Channels the session had (decides which per-name signals exist, as zeros).
+    sources: frozenset[str]
+
+    def times(self) -> list[float]:
+        return [k * PERIOD_S for k in range(self.length)]
+
+    def get(self, name: str) -> list[float] | None:
+        """The samples of `name`, or None when the session could not give it."""
+        found = self.values.get(name)
+        if found is not None:
+            return found
+        for prefix, needs in _FAMILY_SOURCES.items():
+            if name.startswith(prefix) and needs in self.sources:
+                return [0.0] * self.length  # never active, never seen, never issued
+        return None
+
+    def why_missing(self, name: str) -> str:
+        need = _SOURCE_OF.get(name)
+        if need is None:
+            for prefix, source in _FAMILY_SOURCES.items():
+                if name.startswith(prefix):
+                    need = source
+        if name == "incompatible" and "list_of_active_capabilities" in self.sources:
+            return "the recording carries no catalog (catalog.yaml attachment)"
+        return f"the recording has no {need} messages" if need else "unknown signal"
+
+
+_FAMILY_SOURCES = {
+    "active_": "list_of_active_behaviors",
+    "capability_": "list_of_active_capabilities",
+    "fault_": "vehicle/state",
+    "command_": "mission/command",
+}
+_SOURCE_OF = {name: "vehicle/state" for name in _VEHICLE} | {
+    "incompatible": "list_of_active_capabilities",
+    "unanswered": "activate_behavior",
+    "grounded": "vehicle/state",
+    "end": "any",
+}
+
+
+class SignalBuilder:
+    """Turns a session's messages, in order, into `Signals`.
+
+    `conflicts(capability)`: the capabilities incompatible with it (from the catalog);
+    None when the session has no catalog (then `incompatible` is missing)."""
+
+    def __init__(self, conflicts: Callable[[str], Iterable[str]] | None = None) -> None:
+        self._conflicts = conflicts
+        #: name -> list of (sample, value) changes; the value holds until the next one.
+        self._changes: dict[str, list[tuple[int, float]]] = {}
+        self._current: dict[str, float] = {}
+        self._pulses: dict[str, list[int]] = {}
+        self._sources: set[str] = set()
+        self._last = -1
+        self._home: tuple[float, float] | None = None
+        self._active: frozenset[str] = frozenset()
+        self._capabilities: frozenset[str] = frozenset()
+        self._recurrent: dict[str, bool] = {}
+        self._pending: dict[int, str] = {}
+        self._answered: set[int] = set()
+        self._faults: set[str] = set()
+
+    # -- input ------------------------------------------------------------------------------
+    def mark_time(self, t_ns: int) -> None:
+        """A message no signal reads: it still extends the session."""
+        k = t_ns // PERIOD_NS
+        if k > self._last:
+            self._last = k
+
+    def topic(self, name: str, t_ns: int, data: Any) -> None:
+        k = t_ns // PERIOD_NS
+        if k > self._last:
+            self._last = k
+        if not isinstance(data, dict):
+            return
+        if name == "vehicle/state":
+            self._sources.add(name)
+            self._vehicle(k, data)
+        elif name == "list_of_active_behaviors":
+            self._sources.add(name)
+            self._set_members(k, "active_", self._active, data.get("behaviors"), "_active")
+        elif name == "list_of_active_capabilities":
+            self._sources.add(name)
+            names = [
+                c.get("name")
+                for c in data.get("capabilities") or ()
+                if isinstance(c, dict) and (c.get("references") or 0) > 0
+            ]
+            self._set_members(k, "capability_", self._capabilities, names, "_capabilities")
+            if self._conflicts is not None:
+                self._set(k, "incompatible", float(self._any_conflict()))
+        elif name == "mission/command":
+            self._sources.add(name)
+            behavior = data.get("behavior")
+            if isinstance(behavior, str) and behavior:
+                pulses = self._pulses.setdefault("command_" + behavior, [])
+                if not pulses or pulses[-1] != k:
+                    pulses.append(k)
+        elif name == "behavior_event":
+            uid = data.get("uid")
+            if isinstance(uid, int):
+                # An event can come before its activation's call record: a call is
+                # recorded when it completes, and a start that fails at once answers
+                # inside it.
+                self._answered.add(uid)
+                if self._pending.pop(uid, None) is not None:
+                    self._set(k, "unanswered", float(len(self._pending)))
+
+    def call(self, service: str, t_ns: int, request: Any, response: Any) -> None:
+        k = t_ns // PERIOD_NS
+        if k > self._last:
+            self._last = k
+        if not isinstance(response, dict) or not isinstance(request, dict):
+            return
+        if service == "default_values":
+            behavior = request.get("behavior")
+            if isinstance(behavior, str):
+                self._recurrent[behavior] = bool(response.get("recurrent"))
+        elif service == "activate_behavior":
+            self._sources.add(service)
+            behavior = request.get("behavior")
+            uid = response.get("uid")
+            if response.get("ok") and isinstance(uid, int) and isinstance(behavior, str):
+                if not self._recurrent.get(behavior, False) and uid not in self._answered:
+                    self._pending[uid] = behavior
+            self._set(k, "unanswered", float(len(self._pending)))
+
+    # -- output -----------------------------------------------------------------------------
+    def finish(self) -> Signals:
+        length = self._last + 1 if self._last >= 0 else 0
+        values: dict[str, list[float]] = {}
+        for name, changes in self._changes.items():
+            # A vehicle signal is known from the start (its first value); a count or a
+            # 0/1 flag is 0 until its first change.
+            first = changes[0][1] if name in _VEHICLE else 0.0
+            values[name] = _hold(changes, length, first)
+        for name, pulses in self._pulses.items():
+            column = [0.0] * length
+            for k in pulses:
+                column[k] = 1.0
+            values[name] = column
+        if length:
+            end = [0.0] * length
+            end[-1] = 1.0
+            values["end"] = end
+        return Signals(length, values, frozenset(self._sources))
+
+    # -- internals --------------------------------------------------------------------------
+    def _set(self, k: int, name: str, value: float) -> None:
+        if self._current.get(name) == value:
+            return
+        self._current[name] = value
+        changes = self._changes.setdefault(name, [])
+        if changes and changes[-1][0] == k:
+            changes[-1] = (k, value)  # the state at the end of the tick counts
+        else:
+            changes.append((k, value))
+
+    def _set_members(
+        self, k: int, prefix: str, before: frozenset[str], names: Any, attr: str
+    ) -> None:
+        now = frozenset(n for n in names or () if isinstance(n, str))
+        for name in before - now:
+            self._set(k, prefix + name, 0.0)
+        for name in now - before:
+            self._set(k, prefix + name, 1.0)
+        setattr(self, attr, now)
+
+    def _any_conflict(self) -> bool:
+        assert self._conflicts is not None
+        held = self._capabilities
+        return any(other in held for name in held for other in self._conflicts(name))
+
+    def _vehicle(self, k: int, data: dict[str, Any]) -> None:
+        position = data.get("position")
+        if isinstance(position, list) and len(position) == 3:
+            x, y, z = (float(v) for v in position)
+            self._set(k, "altitude", z)
+            if self._home is None:
+                self._home = (x, y)
+            self._set(k, "distance_home", math.hypot(x - self._home[0], y - self._home[1]))
+        velocity = data.get("velocity")
+        if isinstance(velocity, list) and len(velocity) == 3:
+            self._set(k, "speed", math.sqrt(sum(float(v) * float(v) for v in velocity)))
+        battery = data.get("battery")
+        if isinstance(battery, (int, float)):
+            self._set(k, "battery", float(battery))
+            if battery < LOW_BATTERY_LEVEL:
+                self._fault(k, "low_battery")
+        flying = bool(data.get("flying"))
+        self._set(k, "flying", float(flying))
+        self._set(k, "landed", float(not flying))
+        self._set(k, "armed", float(bool(data.get("armed"))))
+        fault = data.get("fault") or ""
+        kind = fault.split(":", 1)[0] if isinstance(fault, str) else ""
+        self._set(k, "link", 0.0 if kind == "link_lost" else 1.0)
+        if kind:
+            self._fault(k, kind)
+        self._set(k, "grounded", float(bool(self._faults & set(GROUNDING_FAULTS))))
+
+    def _fault(self, k: int, kind: str) -> None:
+        if kind not in self._faults:
+            self._faults.add(kind)
+            self._set(k, "fault_" + kind, 1.0)
+
+
+def _hold(changes: list[tuple[int, float]], length: int, first: float) -> list[float]:
+    """Zero-order hold of `changes` over `length` samples, `first` before the first."""
+    column = [first] * length
+    value = first
+    index = 0
+    for k in range(length):
+        while index < len(changes) and changes[index][0] <= k:
+            value = changes[index][1]
+            index += 1
+        column[k] = value
+    return column
