@@ -31,13 +31,57 @@ from aeroexec.properties.signals import PERIOD_NS, PERIOD_S
 
 #: Tokens an expression may hold (RTAMT's lexer's symbolic names).
 _ALLOWED_TOKENS = frozenset(
-    """MINUS PLUS TIMES DIVIDE LPAREN RPAREN LBRACK RBRACK COLON COMMA ABS SQRT EXP POW
-    SEC MSEC USEC NSEC NotOperator OrOperator AndOperator IffOperator ImpliesOperator
-    XorOperator RiseOperator FallOperator AlwaysOperator EventuallyOperator UntilOperator
-    UnlessOperator HistoricallyOperator OnceOperator SinceOperator NextOperator
-    PreviousOperator EqualOperator NotEqualOperator GreaterOrEqualOperator
-    LesserOrEqualOperator GreaterOperator LesserOperator BooleanLiteral TRUE FALSE
-    IntegerLiteral RealLiteral Identifier WHITESPACE LINE_TERMINATOR""".split()
+    {
+        "MINUS",
+        "PLUS",
+        "TIMES",
+        "DIVIDE",
+        "LPAREN",
+        "RPAREN",
+        "LBRACK",
+        "RBRACK",
+        "COLON",
+        "COMMA",
+        "ABS",
+        "SQRT",
+        "EXP",
+        "POW",
+        "SEC",
+        "MSEC",
+        "USEC",
+        "NSEC",
+        "NotOperator",
+        "OrOperator",
+        "AndOperator",
+        "IffOperator",
+        "ImpliesOperator",
+        "XorOperator",
+        "RiseOperator",
+        "FallOperator",
+        "AlwaysOperator",
+        "EventuallyOperator",
+        "UntilOperator",
+        "UnlessOperator",
+        "HistoricallyOperator",
+        "OnceOperator",
+        "SinceOperator",
+        "NextOperator",
+        "PreviousOperator",
+        "EqualOperator",
+        "NotEqualOperator",
+        "GreaterOrEqualOperator",
+        "LesserOrEqualOperator",
+        "GreaterOperator",
+        "LesserOperator",
+        "BooleanLiteral",
+        "TRUE",
+        "FALSE",
+        "IntegerLiteral",
+        "RealLiteral",
+        "Identifier",
+        "WHITESPACE",
+        "LINE_TERMINATOR",
+    }
 )
 _RTAMT_ERROR = re.compile(r"(\d+):(\d+):\s*(.*)", re.S)
 
@@ -86,10 +130,8 @@ class Formula:
         results = self._spec.ast.offline_results  # the Boolean pass's, per node
         top = self.top
         rob = float(robustness[0][1]) if robustness else 0.0
-        if type(top).__name__ == "Always":
-            series = results[top.children[0]]
-        else:
-            series = results[top][:1]
+        always = type(top).__name__ == "Always"
+        series = results[top.children[0]] if always else results[top][:1]
         first = next((k for k, v in enumerate(series) if v < 0), None)
         if first is None:
             return Outcome(True, rob, None)
@@ -117,7 +159,7 @@ def tokens(text: str) -> list[Token]:
     problems: list[tuple[int, int, str]] = []
 
     class Collect(ErrorListener):  # type: ignore[misc]
-        def syntaxError(self, recognizer, symbol, line, column, msg, e):  # noqa: N802, ANN001
+        def syntaxError(self, recognizer, symbol, line, column, msg, e):
             problems.append((line, column, msg))
 
     with _quiet():
@@ -157,8 +199,7 @@ def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Form
         if token.kind == "Identifier":
             if not known(token.text):
                 raise PropertyError(
-                    f"unknown signal '{token.text}' (the signals are listed in "
-                    "docs/properties.md)",
+                    f"unknown signal '{token.text}' (the signals are listed in docs/properties.md)",
                     _at(mark, token.line, token.column),
                 )
             if token.text not in names:
@@ -169,7 +210,7 @@ def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Form
     formula = Formula(text, tuple(names), mark, spec, boolean)
     try:  # bounds that are no multiple of the tick fail here, not in a check
         formula.evaluate({n: [0.0, 0.0] for n in names}, 2)
-    except Exception as exc:  # noqa: BLE001 - RTAMT raises plain Exceptions
+    except Exception as exc:
         raise PropertyError(_rtamt_message(exc), mark) from None
     return formula
 
@@ -188,7 +229,7 @@ def _parse(text: str, names: Sequence[str], mark: Mark) -> tuple[Any, Any]:
     try:
         with _quiet():
             spec.parse()
-    except Exception as exc:  # noqa: BLE001 - RTAMTException and antlr's own
+    except Exception as exc:
         message = _rtamt_message(exc)
         found = _RTAMT_ERROR.match(message)
         if found:
@@ -233,7 +274,7 @@ def _boolean_visitor() -> type:
         }
 
         class BooleanVisitor(StlDiscreteTimeOfflineAstVisitor):  # type: ignore[misc]
-            def visitPredicate(self, node, *args, **kwargs):  # noqa: N802, ANN001, ANN201
+            def visitPredicate(self, node, *args, **kwargs):
                 left = self.visit(node.children[0], *args, **kwargs)
                 right = self.visit(node.children[1], *args, **kwargs)
                 test = tests[str(node.operator)]

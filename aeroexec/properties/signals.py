@@ -71,8 +71,13 @@ SIGNALS: tuple[SignalDoc, ...] = (
         "accepted activations of non-recurrent behaviors not yet ended by their event",
         "activate_behavior, default_values, behavior_event",
     ),
-    SignalDoc("grounded", "0/1", "a fault that makes flight impossible was seen "
-              f"({', '.join(GROUNDING_FAULTS)}), from then on", "vehicle/state fault"),
+    SignalDoc(
+        "grounded",
+        "0/1",
+        "a fault that makes flight impossible was seen "
+        f"({', '.join(GROUNDING_FAULTS)}), from then on",
+        "vehicle/state fault",
+    ),
     SignalDoc("end", "0/1", "1 at the session's last sample", "the recording's last message"),
 )
 
@@ -240,9 +245,14 @@ class SignalBuilder:
             self._sources.add(service)
             behavior = request.get("behavior")
             uid = response.get("uid")
-            if response.get("ok") and isinstance(uid, int) and isinstance(behavior, str):
-                if not self._recurrent.get(behavior, False) and uid not in self._answered:
-                    self._pending[uid] = behavior
+            if (
+                response.get("ok")
+                and isinstance(uid, int)
+                and isinstance(behavior, str)
+                and not self._recurrent.get(behavior, False)
+                and uid not in self._answered
+            ):
+                self._pending[uid] = behavior
             self._set(k, "unanswered", float(len(self._pending)))
 
     # -- output -----------------------------------------------------------------------------

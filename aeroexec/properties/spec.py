@@ -105,10 +105,11 @@ def parse_properties(text: str, file: str) -> list[Property]:
     if items is None or not items.is_list:
         where = items.mark if items is not None else root.mark
         raise PropertyError("'properties' must be a list of properties", where)
-    return [_property(item) for item in items.value]
+    lines = text.splitlines()
+    return [_property(item, lines) for item in items.value]
 
 
-def _property(node: YNode) -> Property:
+def _property(node: YNode, lines: list[str]) -> Property:
     if not node.is_map:
         raise PropertyError("a property is a mapping with 'name' and 'formula'", node.mark)
     for key, _ in node.items():
@@ -125,7 +126,9 @@ def _property(node: YNode) -> Property:
         )
     formula_node = _text(node, "formula", required=True)
     assert formula_node is not None
-    formula = compile_formula(formula_node.value, formula_node.mark, is_known_signal)
+    formula = compile_formula(
+        formula_node.value, _content(formula_node.mark, lines), is_known_signal
+    )
     severity_node = _text(node, "severity")
     severity = severity_node.value if severity_node else "error"
     if severity not in SEVERITIES:
@@ -154,3 +157,12 @@ def _text(node: YNode, key: str, *, required: bool = False) -> YNode | None:
     if not isinstance(value.value, str):
         raise PropertyError(f"'{key}' must be text", value.mark)
     return value
+
+
+def _content(mark: Mark, lines: list[str]) -> Mark:
+    """Where a scalar's text begins: after its opening quote when it is quoted."""
+    if 0 < mark.line <= len(lines):
+        line = lines[mark.line - 1]
+        if 0 < mark.column <= len(line) and line[mark.column - 1] in "\"'":
+            return Mark(mark.file, mark.line, mark.column + 1)
+    return mark
