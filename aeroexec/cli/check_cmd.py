@@ -25,8 +25,8 @@ Example:
   aeroexec check --spec spec.yaml --explain ceiling
 
 \b
-Exit codes: 0 every property holds; 1 a property of severity error is violated;
-            2 a recording or property file could not be read.
+Exit codes: 0 every property holds; 1 a property of severity error was
+            violated; 2 a recording or property file could not be read.
 """
 
 
@@ -66,8 +66,8 @@ def check(
         str | None,
         typer.Option(
             "--explain",
-            metavar="NAME",
-            help="Print a property (formula, signals and their units) and exit.",
+            metavar="CODE",
+            help="Print a property, by its name (formula, signals and their units) and exit.",
             show_default=False,
         ),
     ] = None,

@@ -159,7 +159,8 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
 def check_recording(path: str | os.PathLike[str], properties: PropertySet) -> CheckReport:
     signals = signals_from_recording(path)
     verdicts = evaluate(properties, signals)
-    return CheckReport(str(path), tuple(verdicts), max(0, signals.length - 1) * PERIOD_S)
+    duration = round(max(0, signals.length - 1) * PERIOD_S, 6)
+    return CheckReport(str(path), tuple(verdicts), duration)
 
 
 def _inside(topic: str) -> str:
