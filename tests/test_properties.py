@@ -333,6 +333,5 @@ def test_check_explains_a_property_and_refuses_a_bad_spec_in_one_line(tmp_path) 
     refused = aeroexec("check", "x.mcap", "--spec", str(bad))
     assert refused.returncode == 2
     assert refused.stderr == (
-        f"{bad}:2:32: error: unknown signal 'alt' (the signals are listed in "
-        "docs/properties.md)\n"
+        f"{bad}:2:32: error: unknown signal 'alt' (the signals are listed in docs/properties.md)\n"
     )

@@ -26,7 +26,10 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from aeroexec.errors import Mark, PropertyError
+from aeroexec.properties import semantics
 from aeroexec.properties.signals import PERIOD_NS, PERIOD_S
 
 #: Tokens an expression may hold (RTAMT's lexer's symbolic names).
@@ -108,6 +111,11 @@ class Formula:
     def top(self) -> Any:
         return self._spec.ast.specs[0]
 
+    @property
+    def ast(self) -> Any:
+        """RTAMT's parsed specification (for tests that hold our semantics to its)."""
+        return self._spec.ast
+
     def horizon_s(self) -> float | None:
         """How far past a sample the body of a top-level `always` looks (None: without
         bound, or the formula is not an `always`): a violation at sample k is final once
@@ -119,26 +127,24 @@ class Formula:
 
     def evaluate(self, columns: Mapping[str, Sequence[float]], length: int) -> Outcome:
         """Evaluate on `length` samples of every signal in `signals`."""
-        dataset: dict[str, Any] = {"time": [k * PERIOD_S for k in range(length)]}
-        for name in self.signals:
-            dataset[name] = list(columns[name])  # RTAMT may extend what it is given
-        with _quiet():
-            robustness = self._spec.evaluate(dict(dataset))
-            for name in self.signals:
-                dataset[name] = list(columns[name])
-            self._boolean.evaluate(dataset)
-        results = self._spec.ast.offline_results  # the Boolean pass's, per node
+        arrays = {name: np.asarray(columns[name], dtype=float) for name in self.signals}
         top = self.top
-        rob = float(robustness[0][1]) if robustness else 0.0
-        always = type(top).__name__ == "Always"
-        series = results[top.children[0]] if always else results[top][:1]
-        first = next((k for k, v in enumerate(series) if v < 0), None)
-        if first is None:
+        robustness = semantics.run(self._spec, top, arrays, length)
+        verdicts = semantics.run(self._boolean, top, arrays, length)
+        rob = float(robustness[0]) if length else 0.0
+        if type(top).__name__ == "Always":
+            series = self._boolean.ast.offline_results[top.children[0]]
+        else:
+            series = verdicts[:1]
+        violated = np.flatnonzero(series < 0)
+        if len(violated) == 0:
             return Outcome(True, rob, None)
-        last = first
-        while last + 1 < len(series) and series[last + 1] < 0:
-            last += 1
-        return Outcome(False, rob, (first, last if len(series) > 1 else length - 1))
+        first = int(violated[0])
+        if len(series) == 1:
+            return Outcome(False, rob, (0, length - 1))
+        holds_after = np.flatnonzero(series[first:] >= 0)
+        last = first + int(holds_after[0]) - 1 if len(holds_after) else len(series) - 1
+        return Outcome(False, rob, (first, last))
 
 
 @dataclass(frozen=True, slots=True)
@@ -217,9 +223,6 @@ def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Form
 
 def _parse(text: str, names: Sequence[str], mark: Mark) -> tuple[Any, Any]:
     import rtamt
-    from rtamt.semantics.abstract_discrete_time_offline_interpreter import (
-        discrete_time_offline_interpreter_factory,
-    )
 
     spec = rtamt.StlDiscreteTimeOfflineSpecification()
     for name in names:
@@ -236,52 +239,10 @@ def _parse(text: str, names: Sequence[str], mark: Mark) -> tuple[Any, Any]:
             line, column, rest = int(found[1]), int(found[2]), found[3]
             raise PropertyError(_tidy(rest), _at(mark, line, column)) from None
         raise PropertyError(_tidy(message), mark) from None
-    boolean = discrete_time_offline_interpreter_factory(_boolean_visitor())()
-    boolean.set_ast(spec.ast)
-    boolean.set_sampling_period(PERIOD_NS // 1_000_000, "ms", 0.1)
-    return spec, _BooleanSpec(boolean)
-
-
-class _BooleanSpec:
-    def __init__(self, interpreter: Any) -> None:
-        self._interpreter = interpreter
-
-    def evaluate(self, dataset: dict[str, Any]) -> Any:
-        return self._interpreter.evaluate(dataset)
-
-
-_BOOLEAN_VISITOR: type | None = None
-
-
-def _boolean_visitor() -> type:
-    """RTAMT's offline visitor with comparisons as +1 (true) / -1 (false): its min/max
-    operators then compute the Boolean semantics exactly."""
-    global _BOOLEAN_VISITOR
-    if _BOOLEAN_VISITOR is None:
-        import operator
-
-        from rtamt.semantics.stl.discrete_time.offline.ast_visitor import (
-            StlDiscreteTimeOfflineAstVisitor,
-        )
-
-        tests = {
-            "<": operator.lt,
-            "<=": operator.le,
-            "==": operator.eq,
-            "!=": operator.ne,
-            ">": operator.gt,
-            ">=": operator.ge,
-        }
-
-        class BooleanVisitor(StlDiscreteTimeOfflineAstVisitor):  # type: ignore[misc]
-            def visitPredicate(self, node, *args, **kwargs):
-                left = self.visit(node.children[0], *args, **kwargs)
-                right = self.visit(node.children[1], *args, **kwargs)
-                test = tests[str(node.operator)]
-                return [1.0 if test(a, b) else -1.0 for a, b in zip(left, right, strict=True)]
-
-        _BOOLEAN_VISITOR = BooleanVisitor
-    return _BOOLEAN_VISITOR
+    period_ms = PERIOD_NS // 1_000_000
+    robustness = semantics.interpreter(spec.ast, period_ms, boolean=False)
+    boolean = semantics.interpreter(spec.ast, period_ms, boolean=True)
+    return robustness, boolean
 
 
 def _future(node: Any) -> float | None:
