@@ -211,8 +211,8 @@ def test_per_name_signals_are_zero_where_the_channel_exists() -> None:
     builder.topic("list_of_active_behaviors", 0, {"behaviors": ["TAKE_OFF"]})
     builder.topic("list_of_active_behaviors", 3 * PERIOD_NS, {"behaviors": []})
     signals = builder.finish()
-    assert signals.get("active_TAKE_OFF") == [1.0, 1.0, 1.0, 0.0]
-    assert signals.get("active_LAND") == [0.0] * 4
+    assert signals.get("active_TAKE_OFF").tolist() == [1.0, 1.0, 1.0, 0.0]
+    assert signals.get("active_LAND").tolist() == [0.0] * 4
     assert signals.get("altitude") is None
     assert "vehicle/state" in signals.why_missing("altitude")
 

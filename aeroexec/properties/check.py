@@ -23,7 +23,7 @@ from aeroexec.catalog.loader import parse_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.properties.signals import PERIOD_S, SignalBuilder, Signals
 from aeroexec.properties.spec import Property, PropertySet
-from aeroexec.recording import open_recording
+from aeroexec.recording import RawMessage, RecordedAttachment, open_recording
 from aeroexec.recording.schemas import SERVICE_CALL
 
 #: The channels (inside the drone's namespace) signals come from: only these are decoded.
@@ -127,12 +127,17 @@ def catalog_of_recording(text: str | None) -> Catalog | None:
 def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
     """The signals of a recording, decoding only the channels they come from."""
     recording = open_recording(path)
-    catalog = catalog_of_recording(
-        next((a.text for a in recording.attachments if a.name == "catalog.yaml"), None)
-    )
-    builder = SignalBuilder(catalog.conflicts_of if catalog is not None else None)
+    builder = SignalBuilder(None)
     wanted: dict[int, tuple[str, bool] | None] = {}
-    for message in recording.messages():
+    last_ns = -1
+    # One pass: the recorder writes its attachments (the catalog) before any message.
+    for message in recording.items():
+        if not isinstance(message, RawMessage):
+            if isinstance(message, RecordedAttachment) and message.name == "catalog.yaml":
+                catalog = catalog_of_recording(message.text)
+                if catalog is not None:
+                    builder.use_catalog(catalog.conflicts_of)
+            continue
         channel = message.channel
         kind = wanted.get(channel.id, False)
         if kind is False:
@@ -141,7 +146,7 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
             use = name in SERVICES if is_call else name in TOPICS
             kind = wanted[channel.id] = (name, is_call) if use else None
         if kind is None:
-            builder.mark_time(message.log_time_ns)
+            last_ns = max(last_ns, message.log_time_ns)
             continue
         try:
             data = orjson.loads(message.data)
@@ -153,6 +158,8 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
                 builder.call(name, message.log_time_ns, data.get("request"), data.get("response"))
         else:
             builder.topic(name, message.log_time_ns, data)
+    if last_ns >= 0:
+        builder.mark_time(last_ns)  # messages no signal reads still extend the session
     return builder.finish()
 
 

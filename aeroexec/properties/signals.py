@@ -18,6 +18,8 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 #: The executive's tick (aeroexec/executive/clock.py steps 0.1 s): one sample per tick.
 PERIOD_NS = 100_000_000
 PERIOD_S = PERIOD_NS / 1e9
@@ -121,21 +123,21 @@ class Signals:
     a signal the session could not give is absent."""
 
     length: int
-    values: Mapping[str, list[float]]
+    values: Mapping[str, np.ndarray]
     #: Channels the session had (decides which per-name signals exist, as zeros).
     sources: frozenset[str]
 
     def times(self) -> list[float]:
         return [k * PERIOD_S for k in range(self.length)]
 
-    def get(self, name: str) -> list[float] | None:
+    def get(self, name: str) -> np.ndarray | None:
         """The samples of `name`, or None when the session could not give it."""
         found = self.values.get(name)
         if found is not None:
             return found
         for prefix, needs in _FAMILY_SOURCES.items():
             if name.startswith(prefix) and needs in self.sources:
-                return [0.0] * self.length  # never active, never seen, never issued
+                return np.zeros(self.length)  # never active, never seen, never issued
         return None
 
     def why_missing(self, name: str) -> str:
@@ -183,9 +185,17 @@ class SignalBuilder:
         self._recurrent: dict[str, bool] = {}
         self._pending: dict[int, str] = {}
         self._answered: set[int] = set()
+        #: (sample, x, y, z, speed, battery, flying, armed) per vehicle state.
+        self._rows: list[tuple[int, float, float, float, float, float, float, float]] = []
+        self._last_fault: Any = None
         self._faults: set[str] = set()
 
     # -- input ------------------------------------------------------------------------------
+    def use_catalog(self, conflicts: Callable[[str], Iterable[str]]) -> None:
+        """The catalog's capability conflicts, when they become known (a recording's
+        attachment, read before its messages)."""
+        self._conflicts = conflicts
+
     def mark_time(self, t_ns: int) -> None:
         """A message no signal reads: it still extends the session."""
         k = t_ns // PERIOD_NS
@@ -258,19 +268,37 @@ class SignalBuilder:
     # -- output -----------------------------------------------------------------------------
     def finish(self) -> Signals:
         length = self._last + 1 if self._last >= 0 else 0
-        values: dict[str, list[float]] = {}
+        values: dict[str, np.ndarray] = {}
+        samples = np.arange(length)
         for name, changes in self._changes.items():
-            # A vehicle signal is known from the start (its first value); a count or a
-            # 0/1 flag is 0 until its first change.
-            first = changes[0][1] if name in _VEHICLE else 0.0
-            values[name] = _hold(changes, length, first)
+            at = np.array([k for k, _ in changes])
+            column = np.array([v for _, v in changes])
+            # A count or a 0/1 flag is 0 until its first change.
+            index = np.searchsorted(at, samples, side="right") - 1
+            values[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
+        if self._rows and length:
+            rows = np.array(self._rows)
+            # The last state of each tick counts; before the first, the first (a vehicle
+            # signal is known from the session's start).
+            index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
+            held = rows[index]
+            x, y = held[:, 1], held[:, 2]
+            values["altitude"] = held[:, 3]
+            values["speed"] = held[:, 4]
+            values["battery"] = held[:, 5]
+            values["flying"] = held[:, 6]
+            values["landed"] = 1.0 - held[:, 6]
+            values["armed"] = held[:, 7]
+            values["distance_home"] = np.hypot(x - rows[0, 1], y - rows[0, 2])
+            for name in ("link", "grounded"):
+                if name in values:  # 1 (link) or 0 (grounded) before the first state
+                    values[name][: int(rows[0, 0])] = values[name][int(rows[0, 0])]
         for name, pulses in self._pulses.items():
-            column = [0.0] * length
-            for k in pulses:
-                column[k] = 1.0
+            column = np.zeros(length)
+            column[pulses] = 1.0
             values[name] = column
         if length:
-            end = [0.0] * length
+            end = np.zeros(length)
             end[-1] = 1.0
             values["end"] = end
         return Signals(length, values, frozenset(self._sources))
@@ -302,46 +330,39 @@ class SignalBuilder:
         return any(other in held for name in held for other in self._conflicts(name))
 
     def _vehicle(self, k: int, data: dict[str, Any]) -> None:
+        """One row per state (the hot path: a state per tick); columns are built at the
+        end. Faults, rare, are changes."""
         position = data.get("position")
-        if isinstance(position, list) and len(position) == 3:
-            x, y, z = (float(v) for v in position)
-            self._set(k, "altitude", z)
-            if self._home is None:
-                self._home = (x, y)
-            self._set(k, "distance_home", math.hypot(x - self._home[0], y - self._home[1]))
         velocity = data.get("velocity")
-        if isinstance(velocity, list) and len(velocity) == 3:
-            self._set(k, "speed", math.sqrt(sum(float(v) * float(v) for v in velocity)))
         battery = data.get("battery")
-        if isinstance(battery, (int, float)):
-            self._set(k, "battery", float(battery))
-            if battery < LOW_BATTERY_LEVEL:
-                self._fault(k, "low_battery")
-        flying = bool(data.get("flying"))
-        self._set(k, "flying", float(flying))
-        self._set(k, "landed", float(not flying))
-        self._set(k, "armed", float(bool(data.get("armed"))))
+        try:
+            x, y, z = position  # type: ignore[misc]
+            vx, vy, vz = velocity  # type: ignore[misc]
+            row = (
+                k,
+                float(x),
+                float(y),
+                float(z),
+                math.sqrt(vx * vx + vy * vy + vz * vz),
+                float(battery),  # type: ignore[arg-type]
+                1.0 if data.get("flying") else 0.0,
+                1.0 if data.get("armed") else 0.0,
+            )
+        except (TypeError, ValueError):
+            return  # a malformed state is no sample
+        self._rows.append(row)
+        if row[5] < LOW_BATTERY_LEVEL and "low_battery" not in self._faults:
+            self._fault(k, "low_battery")
         fault = data.get("fault") or ""
-        kind = fault.split(":", 1)[0] if isinstance(fault, str) else ""
-        self._set(k, "link", 0.0 if kind == "link_lost" else 1.0)
-        if kind:
-            self._fault(k, kind)
-        self._set(k, "grounded", float(bool(self._faults & set(GROUNDING_FAULTS))))
+        if fault != self._last_fault:
+            self._last_fault = fault
+            kind = fault.split(":", 1)[0] if isinstance(fault, str) else ""
+            self._set(k, "link", 0.0 if kind == "link_lost" else 1.0)
+            if kind:
+                self._fault(k, kind)
+            self._set(k, "grounded", float(bool(self._faults & set(GROUNDING_FAULTS))))
 
     def _fault(self, k: int, kind: str) -> None:
         if kind not in self._faults:
             self._faults.add(kind)
             self._set(k, "fault_" + kind, 1.0)
-
-
-def _hold(changes: list[tuple[int, float]], length: int, first: float) -> list[float]:
-    """Zero-order hold of `changes` over `length` samples, `first` before the first."""
-    column = [first] * length
-    value = first
-    index = 0
-    for k in range(length):
-        while index < len(changes) and changes[index][0] <= k:
-            value = changes[index][1]
-            index += 1
-        column[k] = value
-    return column
