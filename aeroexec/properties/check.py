@@ -163,7 +163,9 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
     return builder.finish()
 
 
-def check_recording(path: str | os.PathLike[str], properties: PropertySet) -> CheckReport:
+def check_recording(
+    path: str | os.PathLike[str], properties: PropertySet | Iterable[Property]
+) -> CheckReport:
     signals = signals_from_recording(path)
     verdicts = evaluate(properties, signals)
     duration = round(max(0, signals.length - 1) * PERIOD_S, 6)
