@@ -13,7 +13,7 @@ import pytest
 
 from aeroexec.mission.session import SessionConfig, simulate
 from aeroexec.properties.check import HELD, VIOLATED, check_recording
-from aeroexec.properties.signals import SIGNALS, FAMILIES
+from aeroexec.properties.signals import FAMILIES, SIGNALS
 from aeroexec.properties.spec import parse_properties
 from aeroexec.vehicles.world import DEFAULT_WORLD
 
