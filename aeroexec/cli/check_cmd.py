@@ -9,6 +9,7 @@ import typer
 
 from aeroexec.cli.app import app, guarded
 from aeroexec.cli.options import format_option
+from aeroexec.cli.spec import SpecOption
 from aeroexec.errors import PropertyError
 from aeroexec.properties import report as render
 from aeroexec.properties.check import check_recording
@@ -36,17 +37,6 @@ class CheckFormat(str, Enum):
     sarif = "sarif"
     junit = "junit"
     github = "github"
-
-
-SpecOption = Annotated[
-    list[str] | None,
-    typer.Option(
-        "--spec",
-        metavar="FILE",
-        help="A property file, or aeroexec:safety (repeatable; default: aeroexec:safety).",
-        show_default=False,
-    ),
-]
 
 
 @app.command("check", help=HELP)

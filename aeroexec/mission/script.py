@@ -20,7 +20,7 @@ from types import CodeType
 from typing import Any
 
 from aeroexec.errors import AeroexecError, Mark, MissionError, one_line
-from aeroexec.executive.executive import TimeLimitReached
+from aeroexec.executive.executive import StopRequested, TimeLimitReached
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import handling as handling_signals
 from aeroexec.mission.api import MODULE_NAME, MissionAPI
@@ -45,6 +45,7 @@ class Ending(str, Enum):
     RAISED = "raised"
     EXITED = "exited"  # the mission called sys.exit()
     TIME_LIMIT = "max_sim_time"
+    STOPPED = "property"  # a violated property's action ended it (`--spec`)
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,6 +150,10 @@ def _run(step: Callable[[], object], script: MissionScript) -> MissionOutcome | 
     except TimeLimitReached as exc:
         return MissionOutcome(
             False, None, str(exc), traceback.format_exc(), Ending.TIME_LIMIT, _where(exc, script)
+        )
+    except StopRequested as exc:
+        return MissionOutcome(
+            False, None, exc.reason, traceback.format_exc(), Ending.STOPPED, _where(exc, script)
         )
     except SystemExit as exc:
         where = _where(exc, script)

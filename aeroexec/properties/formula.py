@@ -125,6 +125,24 @@ class Formula:
             return None
         return _future(top.children[0])
 
+    def window_ticks(self) -> tuple[int, int] | None:
+        """(past, future): how many ticks before and after a sample the body of a
+        top-level `always` reads; None when either is unbounded (or the formula is no
+        `always`): such a property can only be judged on the whole session."""
+        top = self.top
+        if type(top).__name__ != "Always":
+            return None
+        future = _future(top.children[0])
+        past = _past(top.children[0])
+        if future is None or past is None:
+            return None
+        return round(past / PERIOD_S), round(future / PERIOD_S)
+
+    def body_verdicts(self, columns: Mapping[str, Sequence[float]], length: int) -> np.ndarray:
+        """The body of a top-level `always`, per sample: > 0 holds, < 0 violated."""
+        arrays = {name: np.asarray(columns[name], dtype=float) for name in self.signals}
+        return semantics.run(self._boolean, self.top.children[0], arrays, length)
+
     def evaluate(self, columns: Mapping[str, Sequence[float]], length: int) -> Outcome:
         """Evaluate on `length` samples of every signal in `signals`."""
         arrays = {name: np.asarray(columns[name], dtype=float) for name in self.signals}
@@ -259,6 +277,25 @@ def _future(node: Any) -> float | None:
     deepest = 0.0
     for child in node.children:
         inner = _future(child)
+        if inner is None:
+            return None
+        deepest = max(deepest, inner)
+    return own + deepest
+
+
+def _past(node: Any) -> float | None:
+    """The furthest a node looks back, in seconds (None: unbounded)."""
+    kind = type(node).__name__
+    if kind in ("Historically", "Once", "Since"):
+        return None
+    own = 0.0
+    if kind in ("TimedHistorically", "TimedOnce", "TimedSince"):
+        own = float(node.end) * _unit_s(getattr(node, "end_unit", "") or "s")
+    elif kind in ("Previous", "StrongPrevious", "Rise", "Fall"):
+        own = PERIOD_S
+    deepest = 0.0
+    for child in node.children:
+        inner = _past(child)
         if inner is None:
             return None
         deepest = max(deepest, inner)

@@ -14,6 +14,7 @@ tick they fall in.
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -193,8 +194,11 @@ class SignalBuilder:
     # -- input ------------------------------------------------------------------------------
     def use_catalog(self, conflicts: Callable[[str], Iterable[str]]) -> None:
         """The catalog's capability conflicts, when they become known (a recording's
-        attachment, read before its messages)."""
+        attachment, before its messages; a session's catalog, after the executive's first
+        messages: the capabilities held so far are judged at once)."""
         self._conflicts = conflicts
+        if "list_of_active_capabilities" in self._sources:
+            self._set(max(self._last, 0), "incompatible", float(self._any_conflict()))
 
     def mark_time(self, t_ns: int) -> None:
         """A message no signal reads: it still extends the session."""
@@ -266,10 +270,17 @@ class SignalBuilder:
             self._set(k, "unanswered", float(len(self._pending)))
 
     # -- output -----------------------------------------------------------------------------
-    def finish(self) -> Signals:
-        length = self._last + 1 if self._last >= 0 else 0
+    @property
+    def last_sample(self) -> int:
+        """The last sample so far (-1 before any message)."""
+        return self._last
+
+    def finish(self, start: int = 0, *, final: bool = True) -> Signals:
+        """The samples from `start` to the last one. `final`: the session has ended (the
+        `end` signal is 1 on its last sample; a window of a running session has no end)."""
+        length = self._last + 1 - start if self._last >= start else 0
         values: dict[str, np.ndarray] = {}
-        samples = np.arange(length)
+        samples = np.arange(start, start + length)
         for name, changes in self._changes.items():
             at = np.array([k for k, _ in changes])
             column = np.array([v for _, v in changes])
@@ -277,29 +288,34 @@ class SignalBuilder:
             index = np.searchsorted(at, samples, side="right") - 1
             values[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
         if self._rows and length:
-            rows = np.array(self._rows)
             # The last state of each tick counts; before the first, the first (a vehicle
             # signal is known from the session's start).
+            first_row = bisect_right(self._rows, (start, math.inf)) - 1
+            rows = np.array(self._rows[max(first_row, 0) :])
             index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
             held = rows[index]
-            x, y = held[:, 1], held[:, 2]
+            home_x, home_y = self._rows[0][1], self._rows[0][2]
             values["altitude"] = held[:, 3]
             values["speed"] = held[:, 4]
             values["battery"] = held[:, 5]
             values["flying"] = held[:, 6]
             values["landed"] = 1.0 - held[:, 6]
             values["armed"] = held[:, 7]
-            values["distance_home"] = np.hypot(x - rows[0, 1], y - rows[0, 2])
+            values["distance_home"] = np.hypot(held[:, 1] - home_x, held[:, 2] - home_y)
+            first_k = int(self._rows[0][0])
             for name in ("link", "grounded"):
-                if name in values:  # 1 (link) or 0 (grounded) before the first state
-                    values[name][: int(rows[0, 0])] = values[name][int(rows[0, 0])]
+                if name in values and first_k >= start:
+                    # Known from the first state: its value holds before it too.
+                    values[name][: first_k - start] = values[name][first_k - start]
         for name, pulses in self._pulses.items():
             column = np.zeros(length)
-            column[pulses] = 1.0
+            inside = [k - start for k in pulses if k >= start]
+            column[inside] = 1.0
             values[name] = column
         if length:
             end = np.zeros(length)
-            end[-1] = 1.0
+            if final:
+                end[-1] = 1.0
             values["end"] = end
         return Signals(length, values, frozenset(self._sources))
 

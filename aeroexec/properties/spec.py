@@ -143,6 +143,13 @@ def _property(node: YNode, lines: list[str]) -> Property:
         raise PropertyError(
             f"action '{action}': expected one of {', '.join(ACTIONS)}", action_node.mark
         )
+    if action is not None and formula.window_ticks() is None:
+        assert action_node is not None
+        raise PropertyError(
+            f"action '{action}' needs a formula always(BODY) whose BODY looks a bounded "
+            "time back and ahead: it is judged during the flight, tick by tick",
+            action_node.mark,
+        )
     description_node = _text(node, "description")
     description = " ".join(description_node.value.split()) if description_node else ""
     return Property(name, formula, severity, description, action, name_node.mark)

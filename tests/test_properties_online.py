@@ -1,0 +1,125 @@
+"""Properties monitored online (`run --spec`): the same verdicts as `check` on the
+recording of the same flight, and actions that end the flight the way they say."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from pathlib import Path
+
+import pytest
+
+from aeroexec.mission.script import Ending
+from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.properties.check import VIOLATED, check_recording
+from aeroexec.properties.monitor import PropertyMonitor
+from aeroexec.properties.spec import load_properties
+from aeroexec.recording import open_recording
+
+ROOT = Path(__file__).resolve().parent.parent
+APPENDIX_C = ROOT / "missions" / "appendix_c.py"
+FAULTS_WORLD = ROOT / "aeroexec" / "data" / "worlds" / "faults.yaml"
+SPEC = """\
+properties:
+  - name: ceiling
+    formula: always(altitude <= 1.4)
+  - name: lands_soon
+    formula: always((command_LAND >= 1) implies eventually[0:2](landed >= 1))
+  - name: took_off_first
+    formula: always((active_GO_TO_POINT >= 1) implies once(active_TAKE_OFF >= 1))
+  - name: markers_with_odometry
+    formula: always((active_PAY_ATTENTION_TO_VISUAL_MARKERS >= 1) implies
+      (capability_SELF_LOCALIZATION_BY_ODOMETRY >= 1))
+  - name: eventually_far
+    formula: eventually(distance_home >= 6)
+"""
+FENCE = """\
+properties:
+  - name: geofence
+    description: stay within 4 m of home
+    formula: always(distance_home <= 4)
+    action: {action}
+"""
+
+
+def _run(tmp: Path, name: str, specs: list[str], world: Path | None = None):
+    monitor = PropertyMonitor(load_properties(specs))
+    out = tmp / f"{name}.mcap"
+    with contextlib.redirect_stdout(io.StringIO()):
+        result = simulate(
+            SessionConfig(mission=APPENDIX_C, world=world, record=out), observers=[monitor]
+        )
+    return monitor, result, out
+
+
+def _same(verdicts_a, verdicts_b) -> None:
+    a = [(v.name, v.status, v.robustness, v.interval_s, v.missing) for v in verdicts_a]
+    b = [(v.name, v.status, v.robustness, v.interval_s, v.missing) for v in verdicts_b]
+    assert a == b
+
+
+@pytest.mark.parametrize("world", [None, FAULTS_WORLD], ids=["default", "faults"])
+def test_online_and_offline_verdicts_of_one_flight_are_identical(tmp_path, world) -> None:
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(SPEC, encoding="utf-8")
+    specs = ["aeroexec:safety", str(spec)]
+    monitor, _, recording = _run(tmp_path, "flight", specs, world)
+    offline = check_recording(recording, load_properties(specs)).verdicts
+    _same(monitor.verdicts, offline)
+    # Not trivially: both kinds of verdict are there.
+    assert {v.status for v in offline} >= {"held", VIOLATED}
+
+
+def test_a_geofence_with_land_ends_the_flight_at_the_fence(tmp_path) -> None:
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(FENCE.format(action="land"), encoding="utf-8")
+    monitor, result, recording = _run(tmp_path, "fenced", [str(spec), "aeroexec:safety"])
+    # Appendix C crosses 4 m from home at 6.5 s on its way to (3, 5.5).
+    assert monitor.stopped_at_s == pytest.approx(6.5)
+    assert result.outcome.ending is Ending.STOPPED
+    assert result.assurance[-1] == "landing"
+    assert not result.final_state.flying and not result.final_state.armed
+    x, y, _ = result.final_state.position
+    assert 4.0 < (x * x + y * y) ** 0.5 < 4.6  # it landed where it was, just past the fence
+    rec = open_recording(recording)
+    end = rec.metadata["aeroexec_end"]
+    assert end["reason"] == "property"
+    assert "geofence violated at 6.50 s" in end["detail"]
+    published = [r for r in rec.records() if getattr(r, "name", "") == "properties"]
+    early = published[0]
+    assert early.data["status"] == VIOLATED and early.data["t_s"] == 6.5
+    assert early.data["action"] == "land"
+    assert early.log_time_ns <= 7_000_000_000  # seen within the check period
+    logs = [r.data for r in rec.records() if getattr(r, "name", "") == "log"]
+    assert any(d["level"] == 4 and d["name"] == "property:geofence" for d in logs)
+    # After the landing, the safety set holds on the recording, offline as online.
+    offline = check_recording(recording, load_properties([str(spec), "aeroexec:safety"]))
+    _same(monitor.verdicts, offline.verdicts)
+    assert [v.name for v in offline.violated] == ["geofence"]
+
+
+def test_rtl_returns_home_and_lands_hold_keeps_flying_abort_stops(tmp_path) -> None:
+    ends = {}
+    for action in ("rtl", "hold", "abort"):
+        spec = tmp_path / f"{action}.yaml"
+        spec.write_text(FENCE.format(action=action), encoding="utf-8")
+        _, result, _ = _run(tmp_path, action, [str(spec)])
+        ends[action] = result
+    home = ends["rtl"].final_state
+    assert not home.flying
+    assert (home.position[0] ** 2 + home.position[1] ** 2) ** 0.5 < 0.3
+    assert ends["hold"].final_state.flying and ends["hold"].assurance[-1] == "holding"
+    assert ends["abort"].final_state.flying
+    assert ends["abort"].duration_s < ends["hold"].duration_s
+
+
+def test_an_action_needs_a_property_that_can_be_judged_during_the_flight() -> None:
+    from aeroexec.errors import PropertyError
+    from aeroexec.properties.spec import parse_properties
+
+    with pytest.raises(PropertyError) as caught:
+        parse_properties(
+            "properties:\n  - name: a\n    formula: eventually(landed >= 1)\n    action: land\n",
+            "a.yaml",
+        )
+    assert str(caught.value.mark) == "a.yaml:4:13"
