@@ -123,3 +123,31 @@ def test_an_action_needs_a_property_that_can_be_judged_during_the_flight() -> No
             "a.yaml",
         )
     assert str(caught.value.mark) == "a.yaml:4:13"
+
+
+def test_a_window_is_what_the_whole_gives_for_those_ticks(tmp_path) -> None:
+    # The online check's windows against the offline extraction, on a real flight.
+    from aeroexec.properties.check import SERVICES, TOPICS, _inside
+    from aeroexec.properties.signals import SIGNALS, SignalBuilder
+
+    _, _, recording = _run(tmp_path, "flight", ["aeroexec:safety"])
+    builder = SignalBuilder(None)
+    for record in open_recording(recording).records():
+        name = getattr(record, "name", None)
+        if name is None and record.service in SERVICES:
+            builder.call(record.service, record.log_time_ns, record.request, record.response)
+        elif name in TOPICS:
+            builder.topic(name, record.log_time_ns, record.data)
+    names = [s.name for s in SIGNALS if s.name not in ("incompatible", "end")] + [
+        "active_GO_TO_POINT",
+        "capability_SELF_LOCALIZATION_BY_ODOMETRY",
+        "command_LAND",
+        "fault_stuck_motor",
+    ]
+    for start in (0, 1, 23, 40, 93, builder.last_sample):
+        whole = builder.finish(start, final=False)
+        window = builder.window(start, names)
+        assert window is not None
+        for name in names:
+            assert window[name].tolist() == whole.get(name).tolist(), (start, name)
+    assert _inside("/drone1/vehicle/state") == "vehicle/state"

@@ -24,6 +24,7 @@ import io
 import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -111,6 +112,11 @@ class Formula:
     def top(self) -> Any:
         return self._spec.ast.specs[0]
 
+    @cached_property
+    def _sound(self) -> bool:
+        """Whether the sign of RTAMT's robustness decides the verdict (no iff, no xor)."""
+        return not _has(self.top, ("Iff", "Xor"))
+
     @property
     def ast(self) -> Any:
         """RTAMT's parsed specification (for tests that hold our semantics to its)."""
@@ -148,8 +154,12 @@ class Formula:
         arrays = {name: np.asarray(columns[name], dtype=float) for name in self.signals}
         top = self.top
         robustness = semantics.run(self._spec, top, arrays, length)
-        verdicts = semantics.run(self._boolean, top, arrays, length)
         rob = float(robustness[0]) if length else 0.0
+        if rob > 0 and self._sound:
+            # A positive robustness is a satisfaction (STL's soundness): the Boolean pass
+            # would say the same.
+            return Outcome(True, rob, None)
+        verdicts = semantics.run(self._boolean, top, arrays, length)
         if type(top).__name__ == "Always":
             series = self._boolean.ast.offline_results[top.children[0]]
         else:
@@ -281,6 +291,10 @@ def _future(node: Any) -> float | None:
             return None
         deepest = max(deepest, inner)
     return own + deepest
+
+
+def _has(node: Any, kinds: tuple[str, ...]) -> bool:
+    return type(node).__name__ in kinds or any(_has(c, kinds) for c in node.children)
 
 
 def _past(node: Any) -> float | None:

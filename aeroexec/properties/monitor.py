@@ -78,7 +78,7 @@ class PropertyMonitor:
         if topic == TOPIC:
             return
         self.builder.topic(topic, record.log_time_ns, record.data)
-        if topic == "vehicle/state" and self._acting:
+        if self._acting and topic == "vehicle/state":
             tick = record.log_time_ns // PERIOD_NS
             if tick >= self._next_check:
                 self._next_check = tick + self._every
@@ -94,12 +94,11 @@ class PropertyMonitor:
             if final <= judged:
                 continue
             start = max(0, judged + 1 - past)
-            signals = self.builder.finish(start, final=False)
-            columns = {name: signals.get(name) for name in prop.formula.signals}
+            columns = self.builder.window(start, prop.formula.signals)
             self._judged[prop.name] = final
-            if any(column is None for column in columns.values()):
+            if columns is None:
                 continue  # judged at the end, where a missing signal is reported
-            body = prop.formula.body_verdicts(columns, signals.length)
+            body = prop.formula.body_verdicts(columns, now + 1 - start)
             lo, hi = judged + 1 - start, final - start
             bad = [i for i in range(lo, hi + 1) if body[i] < 0]
             if not bad:

@@ -41,6 +41,17 @@ Array = np.ndarray
 class _ArrayVisitor(StlDiscreteTimeOfflineAstVisitor):  # type: ignore[misc]
     boolean = False
 
+    def visit(self, node: Any, *args: Any, **kwargs: Any) -> Array:
+        # RTAMT dispatches through two chains of isinstance tests per node; an online
+        # check of a few ticks spends most of its time there. The method named after the
+        # node's class is the one those chains find (RTAMT's naming), so go there at once.
+        method = getattr(self, "visit" + type(node).__name__, None)
+        if method is None:
+            return super().visit(node, *args, **kwargs)
+        result = method(node, *args, **kwargs)
+        self.ast.offline_results[node] = result
+        return result
+
     # -- atoms --------------------------------------------------------------------------------
     def visitPredicate(self, node: Any, *args: Any, **kwargs: Any) -> Array:
         left = self.visit(node.children[0], *args, **kwargs)

@@ -112,6 +112,23 @@ _VEHICLE = frozenset(
 )
 
 
+#: The vehicle signals made from the state rows (link and grounded are changes).
+_ROW_SIGNALS = ("altitude", "speed", "battery", "flying", "landed", "armed", "distance_home")
+
+
+def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np.ndarray:
+    """`name` from state rows (sample, x, y, z, speed, battery, flying, armed)."""
+    if name == "distance_home":
+        return np.hypot(held[:, 1] - float(first[1]), held[:, 2] - float(first[2]))
+    if name == "landed":
+        return 1.0 - held[:, 6]
+    return held[:, {"altitude": 3, "speed": 4, "battery": 5, "flying": 6, "armed": 7}[name]]
+
+
+def _numeric(row: tuple[Any, ...]) -> bool:
+    return all(isinstance(v, (int, float)) for v in row)
+
+
 def is_known_signal(name: str) -> bool:
     return any(name == s.name for s in SIGNALS) or any(
         name.startswith(prefix) and len(name) > len(prefix) for prefix in FAMILIES
@@ -213,7 +230,8 @@ class SignalBuilder:
         if not isinstance(data, dict):
             return
         if name == "vehicle/state":
-            self._sources.add(name)
+            if not self._rows:
+                self._sources.add(name)
             self._vehicle(k, data)
         elif name == "list_of_active_behaviors":
             self._sources.add(name)
@@ -291,17 +309,11 @@ class SignalBuilder:
             # The last state of each tick counts; before the first, the first (a vehicle
             # signal is known from the session's start).
             first_row = bisect_right(self._rows, (start, math.inf)) - 1
-            rows = np.array(self._rows[max(first_row, 0) :])
+            rows = self._row_array(max(first_row, 0))
             index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
             held = rows[index]
-            home_x, home_y = self._rows[0][1], self._rows[0][2]
-            values["altitude"] = held[:, 3]
-            values["speed"] = held[:, 4]
-            values["battery"] = held[:, 5]
-            values["flying"] = held[:, 6]
-            values["landed"] = 1.0 - held[:, 6]
-            values["armed"] = held[:, 7]
-            values["distance_home"] = np.hypot(held[:, 1] - home_x, held[:, 2] - home_y)
+            for name in _ROW_SIGNALS:
+                values[name] = _vehicle_column(name, held, self._rows[0])
             first_k = int(self._rows[0][0])
             for name in ("link", "grounded"):
                 if name in values and first_k >= start:
@@ -318,6 +330,52 @@ class SignalBuilder:
                 end[-1] = 1.0
             values["end"] = end
         return Signals(length, values, frozenset(self._sources))
+
+    def window(self, start: int, names: Iterable[str]) -> dict[str, np.ndarray] | None:
+        """The samples from `start` to the last one of the signals `names`, as
+        `finish(start, final=False)` gives them, built from only what that window needs
+        (an online check looks at a few ticks); None when one of them is missing."""
+        length = self._last + 1 - start
+        if length <= 0:
+            return None
+        samples = np.arange(start, start + length)
+        out: dict[str, np.ndarray] = {}
+        rows: np.ndarray | None = None
+        for name in names:
+            changes = self._changes.get(name)
+            if name in _ROW_SIGNALS:
+                if not self._rows:
+                    return None
+                if rows is None:
+                    first = max(bisect_right(self._rows, (start, math.inf)) - 1, 0)
+                    part = self._row_array(first)
+                    at = np.searchsorted(part[:, 0], samples, side="right") - 1
+                    rows = part[np.maximum(at, 0)]
+                out[name] = _vehicle_column(name, rows, self._rows[0])
+            elif changes is not None:
+                first = max(bisect_right(changes, (start, math.inf)) - 1, 0)
+                part = changes[first:]
+                at = np.array([k for k, _ in part])
+                column = np.array([v for _, v in part])
+                index = np.searchsorted(at, samples, side="right") - 1
+                out[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
+                first_k = int(self._rows[0][0]) if self._rows else -1
+                if name in ("link", "grounded") and start <= first_k < self._last + 1:
+                    # Known from the first state: its value holds before it too.
+                    out[name][: first_k - start] = out[name][first_k - start]
+            elif name in self._pulses:
+                pulses = self._pulses[name]
+                column = np.zeros(length)
+                column[[k - start for k in pulses[bisect_right(pulses, start - 1) :]]] = 1.0
+                out[name] = column
+            elif name == "end" or any(
+                name.startswith(prefix) and source in self._sources
+                for prefix, source in _FAMILY_SOURCES.items()
+            ):
+                out[name] = np.zeros(length)
+            else:
+                return None
+        return out
 
     # -- internals --------------------------------------------------------------------------
     def _set(self, k: int, name: str, value: float) -> None:
@@ -346,28 +404,27 @@ class SignalBuilder:
         return any(other in held for name in held for other in self._conflicts(name))
 
     def _vehicle(self, k: int, data: dict[str, Any]) -> None:
-        """One row per state (the hot path: a state per tick); columns are built at the
-        end. Faults, rare, are changes."""
-        position = data.get("position")
-        velocity = data.get("velocity")
-        battery = data.get("battery")
+        """One row per state (the hot path online: a state per tick); the columns are
+        made, and the values checked, at the end. Faults, rare, are changes."""
         try:
-            x, y, z = position  # type: ignore[misc]
-            vx, vy, vz = velocity  # type: ignore[misc]
+            position = data["position"]
+            velocity = data["velocity"]
+            battery = data["battery"]
             row = (
                 k,
-                float(x),
-                float(y),
-                float(z),
-                math.sqrt(vx * vx + vy * vy + vz * vz),
-                float(battery),  # type: ignore[arg-type]
-                1.0 if data.get("flying") else 0.0,
-                1.0 if data.get("armed") else 0.0,
+                position[0],
+                position[1],
+                position[2],
+                velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2],
+                battery,
+                data["flying"],
+                data.get("armed", False),
             )
-        except (TypeError, ValueError):
+            low = battery < LOW_BATTERY_LEVEL
+        except (KeyError, IndexError, TypeError):
             return  # a malformed state is no sample
         self._rows.append(row)
-        if row[5] < LOW_BATTERY_LEVEL and "low_battery" not in self._faults:
+        if low and "low_battery" not in self._faults:
             self._fault(k, "low_battery")
         fault = data.get("fault") or ""
         if fault != self._last_fault:
@@ -377,6 +434,17 @@ class SignalBuilder:
             if kind:
                 self._fault(k, kind)
             self._set(k, "grounded", float(bool(self._faults & set(GROUNDING_FAULTS))))
+
+    def _row_array(self, first: int = 0) -> np.ndarray:
+        """The state rows from index `first` as floats (speed from its square); a row with
+        a value that is no number is dropped."""
+        rows = self._rows[first:]
+        try:
+            table = np.array(rows, dtype=float)
+        except (TypeError, ValueError):
+            table = np.array([r for r in rows if _numeric(r)], dtype=float).reshape(-1, 8)
+        table[:, 4] = np.sqrt(table[:, 4])
+        return table
 
     def _fault(self, k: int, kind: str) -> None:
         if kind not in self._faults:
