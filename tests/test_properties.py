@@ -335,3 +335,43 @@ def test_check_explains_a_property_and_refuses_a_bad_spec_in_one_line(tmp_path) 
     assert refused.stderr == (
         f"{bad}:2:32: error: unknown signal 'alt' (the signals are listed in docs/properties.md)\n"
     )
+
+
+def test_replay_check_passes_only_if_the_properties_hold(recordings, tmp_path) -> None:
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(SPEC, encoding="utf-8")
+    rec = str(recordings["appendix_c"])
+    held = aeroexec("replay", rec, "--check", "--spec", "aeroexec:safety")
+    assert held.returncode == 0, held.stdout + held.stderr
+    assert "4 check(s): all properties hold" in held.stdout
+    broken = aeroexec("replay", rec, "--check", "--spec", str(spec))
+    assert broken.returncode == 1
+    assert f"{rec} (replay): t=4.00s: error ceiling:" in broken.stdout
+    assert "no differences" in broken.stdout  # the replay itself is equal: the property fails
+    assert "replay written to" not in broken.stdout  # the scratch copy is not announced
+    junit = ET.fromstring(aeroexec("replay", rec, "--spec", str(spec), "-f", "junit").stdout)
+    assert junit.tag == "testsuites"
+    [failure] = list(junit.iter("failure"))
+    assert "ceiling" in failure.get("message", "") or failure.text
+    without_check = aeroexec("replay", rec, "--spec", str(spec))
+    assert without_check.returncode == 0  # reported, but --check decides the exit code
+    kept = tmp_path / "again.mcap"
+    written = aeroexec("replay", rec, "--spec", str(spec), "-o", str(kept))
+    assert f"{kept}: t=4.00s: error ceiling" in written.stdout
+
+
+def test_run_spec_reports_and_fails_on_a_violation(tmp_path) -> None:
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(SPEC, encoding="utf-8")
+    done = aeroexec("run", str(APPENDIX_C), "-q", "--spec", str(spec))
+    assert done.returncode == 1
+    assert f"{APPENDIX_C}: t=4.00s: error ceiling" in done.stdout
+    assert "properties: 2 check(s): 1 violated" in done.stdout
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("properties: 3\n", encoding="utf-8")
+    refused = aeroexec(
+        "run", str(APPENDIX_C), "-q", "--spec", str(bad), "-o", str(tmp_path / "x.mcap")
+    )
+    assert refused.returncode == 2
+    assert refused.stderr.startswith(f"{bad}:1:13: error: 'properties' must be a list")
+    assert not (tmp_path / "x.mcap").exists()  # refused before anything ran

@@ -11,8 +11,9 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 if TYPE_CHECKING:
-    from aeroexec.properties.check import Verdict
+    from aeroexec.properties.check import CheckReport, Verdict
     from aeroexec.properties.monitor import PropertyMonitor
+    from aeroexec.properties.spec import PropertySet
 
 SpecOption = Annotated[
     list[str] | None,
@@ -45,3 +46,53 @@ def print_verdicts(verdicts: list[Verdict], source: str) -> bool:
     report = CheckReport(source, tuple(verdicts), 0.0)
     typer.echo(text([report]).replace("1 recording(s), ", "properties: "), nl=False)
     return report.failed
+
+
+def load_spec(spec: list[str] | None) -> PropertySet | None:
+    """The properties of --spec (None without it); `PropertyError` for a bad file."""
+    if not spec:
+        return None
+    from aeroexec.properties.spec import load_properties
+
+    return load_properties(spec)
+
+
+def check_recording(path: str, properties: PropertySet) -> CheckReport:
+    from aeroexec.properties.check import check_recording as check
+
+    return check(path, properties)
+
+
+def verdicts_text(reports: list[CheckReport]) -> str:
+    from aeroexec.properties.report import text
+
+    return text(reports)
+
+
+def with_verdicts_json(document: str, reports: list[CheckReport]) -> str:
+    """A JSON report with the properties' verdicts added under `properties`."""
+    import json
+
+    from aeroexec.properties.report import as_json
+
+    body = json.loads(document)
+    body["properties"] = json.loads(as_json(reports))
+    return json.dumps(body, indent=2)
+
+
+def with_verdicts_junit(document: str, reports: list[CheckReport]) -> str:
+    """A JUnit report with one more test suite per checked recording."""
+    from xml.etree import ElementTree as ET
+
+    from aeroexec.properties.report import junit
+
+    root = ET.fromstring(document)
+    if root.tag == "testsuite":  # one suite: both go under <testsuites>
+        outer = ET.Element("testsuites", name=root.get("name", ""))
+        outer.append(root)
+        root = outer
+    for suite in ET.fromstring(junit(reports)).iter("testsuite"):
+        suite.set("name", f"properties: {suite.get('name')}")
+        root.append(suite)
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, "unicode")
