@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 from pathlib import Path
 
 import pytest
@@ -151,3 +152,49 @@ def test_a_window_is_what_the_whole_gives_for_those_ticks(tmp_path) -> None:
         for name in names:
             assert window[name].tolist() == whole.get(name).tolist(), (start, name)
     assert _inside("/drone1/vehicle/state") == "vehicle/state"
+
+
+# -- fly --spec, against MavSim (the SITL flight is in test_sitl_flights.py) ----------------
+FAR = (
+    "    api.executeBehavior('TAKE_OFF')\n"
+    "    api.executeBehavior('GO_TO_POINT', coordinates=[0, 12, 1])\n"
+    "    api.executeBehavior('LAND')\n"
+)
+
+
+def test_fly_spec_lands_at_the_geofence_and_the_verdicts_match_check(tmp_path) -> None:
+    from live_helpers import free_udp_port, mavsim_thread, write_mission
+
+    from aeroexec.mission.live import FlightConfig, fly
+
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(FENCE.format(action="land"), encoding="utf-8")
+    props = load_properties([str(spec), "aeroexec:safety"])
+    monitor = PropertyMonitor(props, check_every_s=0.1)  # as fly --spec judges: every tick
+    port = free_udp_port()
+    out = tmp_path / "flight.mcap"
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", speed_factor=2.0) as sim:
+        result = fly(
+            FlightConfig(
+                mission=write_mission(tmp_path, FAR),
+                connect=f"udpin:127.0.0.1:{port}",
+                record=out,
+            ),
+            observers=[monitor],
+        )
+        final = sim.stats()["final"]
+    assert result.outcome.ending is Ending.STOPPED
+    assert monitor.stopped_by is not None and monitor.stopped_by.name == "geofence"
+    assert result.ending is not None and result.ending.down
+    assert "switched to LAND" in result.ending.actions
+    assert final["mode"] == "LAND" and not final["armed"]
+    # It landed at the fence, not at the mission's target 12 m away.
+    assert 4.0 < math.hypot(*final["position"][:2]) < 6.0
+    published = [
+        r.data for r in open_recording(out).records() if getattr(r, "name", "") == "properties"
+    ]
+    assert published[0]["property"] == "geofence" and published[0]["action"] == "land"
+    assert published[0]["t_s"] == monitor.stopped_at_s
+    offline = check_recording(out, props)
+    _same(monitor.verdicts, offline.verdicts)
+    assert [v.name for v in offline.violated] == ["geofence"]

@@ -26,15 +26,19 @@ SpecOption = Annotated[
 ]
 
 
-def monitor_for(spec: list[str] | None) -> PropertyMonitor | None:
+def monitor_for(spec: list[str] | None, *, live: bool = False) -> PropertyMonitor | None:
     """A monitor of the properties of `spec` (None without --spec); `PropertyError`
-    (one line, exit 2) for a bad property file, before anything runs."""
+    (one line, exit 2) for a bad property file, before anything runs. `live`: a real
+    flight, where properties with an action are judged every tick (real time leaves the
+    room; a simulation judges them every 0.5 s of its time)."""
     if not spec:
         return None
-    from aeroexec.properties.monitor import PropertyMonitor
+    from aeroexec.properties.monitor import CHECK_EVERY_S, PropertyMonitor
+    from aeroexec.properties.signals import PERIOD_S
     from aeroexec.properties.spec import load_properties
 
-    return PropertyMonitor(load_properties(spec))
+    every = PERIOD_S if live else CHECK_EVERY_S
+    return PropertyMonitor(load_properties(spec), check_every_s=every)
 
 
 def print_verdicts(verdicts: list[Verdict], source: str) -> bool:
