@@ -375,3 +375,27 @@ def test_run_spec_reports_and_fails_on_a_violation(tmp_path) -> None:
     assert refused.returncode == 2
     assert refused.stderr.startswith(f"{bad}:1:13: error: 'properties' must be a list")
     assert not (tmp_path / "x.mcap").exists()  # refused before anything ran
+
+
+def test_verify_checks_a_property_file_against_the_catalog(tmp_path) -> None:
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(
+        "properties:\n"
+        "  - name: a\n"
+        "    formula: always((active_GO_TO_PIONT >= 1) implies (flying >= 1))\n"
+        "  - name: b\n"
+        "    formula: always(capability_SELF_LOCALIZATION_BY_ODOMETRY >= 1)\n",
+        encoding="utf-8",
+    )
+    done = aeroexec("verify", str(DEFAULT_CATALOG), "--spec", str(spec))
+    assert done.returncode == 1
+    assert (
+        f"{spec}:3:22: error AX751 active_GO_TO_PIONT: no behavior GO_TO_PIONT in the catalog "
+        "(did you mean 'GO_TO_POINT'?)"
+    ) in done.stdout
+    assert "AX752" not in done.stdout  # that capability exists
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("properties:\n  - {name: a, formula: 'always(alt < 1)'}\n", encoding="utf-8")
+    unread = aeroexec("verify", str(DEFAULT_CATALOG), "--spec", str(bad))
+    assert unread.returncode == 2
+    assert f"{bad}:2:32: error: unknown signal 'alt'" in unread.stderr

@@ -107,6 +107,8 @@ class Formula:
     mark: Mark
     _spec: Any = field(repr=False)
     _boolean: Any = field(repr=False)
+    #: Every use of a signal in the text, with its place in the property file.
+    uses: tuple[tuple[str, Mark], ...] = ()
 
     @property
     def top(self) -> Any:
@@ -224,6 +226,7 @@ def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Form
     except _LexError as exc:
         raise PropertyError(exc.message, _at(mark, exc.line, exc.column)) from None
     names: list[str] = []
+    uses: list[tuple[str, Mark]] = []
     for token in lexed:
         if token.kind not in _ALLOWED_TOKENS:
             raise PropertyError(
@@ -238,10 +241,11 @@ def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Form
                 )
             if token.text not in names:
                 names.append(token.text)
+            uses.append((token.text, _at(mark, token.line, token.column)))
     if not any(t.kind not in ("WHITESPACE", "LINE_TERMINATOR") for t in lexed):
         raise PropertyError("empty formula", mark)
     spec, boolean = _parse(text, names, mark)
-    formula = Formula(text, tuple(names), mark, spec, boolean)
+    formula = Formula(text, tuple(names), mark, spec, boolean, tuple(uses))
     try:  # bounds that are no multiple of the tick fail here, not in a check
         formula.evaluate({n: [0.0, 0.0] for n in names}, 2)
     except Exception as exc:
