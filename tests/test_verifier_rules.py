@@ -15,8 +15,8 @@ from aeroexec.catalog import read_catalog
 from aeroexec.catalog.formats import read_any_catalog
 from aeroexec.catalog.model import Severity
 from aeroexec.catalog.paths import DEFAULT_CATALOG
-from aeroexec.properties.spec import load_properties
 from aeroexec.plugins import BehaviorSet, BehaviorSources, discover
+from aeroexec.properties.spec import load_properties
 from aeroexec.verifier import Finding, Rule, all_rules, check_mission
 from aeroexec.verifier.engine import check_any_catalog
 from aeroexec.verifier.missions import read_mission
