@@ -198,3 +198,35 @@ def test_fly_spec_lands_at_the_geofence_and_the_verdicts_match_check(tmp_path) -
     offline = check_recording(out, props)
     _same(monitor.verdicts, offline.verdicts)
     assert [v.name for v in offline.violated] == ["geofence"]
+
+
+# -- the viewers ---------------------------------------------------------------------------
+def test_violations_show_in_rerun_as_an_error_and_a_lane(tmp_path) -> None:
+    from test_view import read_rrd
+
+    from aeroexec.viz import write_view
+
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(FENCE.format(action="land"), encoding="utf-8")
+    _, _, recording = _run(tmp_path, "fenced", [str(spec)])
+    target = tmp_path / "fenced.rrd"
+    write_view([recording], target)
+    rrd = read_rrd(target)
+    lane = "/properties/geofence"
+    # Violated from 6.5 s (seen during the flight) to the end of the landing at 10.0 s.
+    assert rrd.values(lane, "StateChange:state") == ["violated", ""]
+    assert rrd.times(lane) == [6_500_000_000, 10_100_000_000]
+    errors = list(zip(rrd.times("/errors"), rrd.values("/errors", "TextLog:text"), strict=True))
+    assert (
+        6_500_000_000,
+        "property geofence violated at 6.50 s: stay within 4 m of home; land",
+    ) in errors
+
+
+def test_the_foxglove_layout_shows_properties_beside_behavior_events() -> None:
+    from aeroexec.viz.foxglove_layout import foxglove_layout
+
+    panel = foxglove_layout()["configById"]["StateTransitions!behavior-events"]
+    values = [path["value"] for path in panel["paths"]]
+    assert "/drone1/properties.property" in values
+    assert "/drone1/properties.status" in values

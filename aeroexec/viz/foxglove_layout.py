@@ -5,8 +5,9 @@
     | Flight (3D: world frame, vehicle | Position (m) and battery (plot of  |
     |   body on <drone>/base_link,     |   vehicle/state)                   |
     |   markers, object, grid)         |------------------------------------|
-    |                                  | Behavior events (state timeline:   |
-    |----------------------------------|   name and code of each event)     |
+    |                                  | Behavior events and properties     |
+    |----------------------------------|   (state timeline: name and code   |
+    |                                  |   of each event; property verdicts)|
     | Call log (Log panel:  | Log      |------------------------------------|
     |   call_log)           |          | Last behavior event (raw message)  |
     +----------------------------------+------------------------------------+
@@ -104,10 +105,13 @@ def panels(drone: str = "drone1") -> dict[str, dict[str, Any]]:
             "sidebarDimension": 240,
         },
         f"{STATE_TRANSITIONS}!behavior-events": {
-            TITLE: "Behavior events",
+            TITLE: "Behavior events and properties",
             "paths": [
                 _path(f"{event}.name", "behavior"),
                 _path(f"{event}.code", "event"),
+                # run/fly --spec: each violation (and the final verdicts) as published.
+                _path(f"{ns}/properties.property", "property"),
+                _path(f"{ns}/properties.status", "verdict"),
             ],
             "isSynced": True,
             "showPoints": True,
