@@ -399,3 +399,40 @@ def test_verify_checks_a_property_file_against_the_catalog(tmp_path) -> None:
     unread = aeroexec("verify", str(DEFAULT_CATALOG), "--spec", str(bad))
     assert unread.returncode == 2
     assert f"{bad}:2:32: error: unknown signal 'alt'" in unread.stderr
+
+
+def test_a_field_a_bag_import_only_defaulted_is_missing_not_guessed() -> None:
+    builder = SignalBuilder(None)
+    state = {
+        "position": [0.0, 0.0, 1.0],
+        "velocity": [0.0, 0.0, 0.0],
+        "yaw": 0.0,
+        "battery": 1.0,
+        "flying": True,
+        "armed": False,
+        "fault": "",
+        "defaulted": ["armed", "fault"],
+    }
+    for tick in range(3):
+        builder.topic("vehicle/state", tick * PERIOD_NS, state)
+    signals = builder.finish()
+    assert signals.get("altitude").tolist() == [1.0, 1.0, 1.0]
+    assert signals.get("armed") is None and signals.get("fault_stuck_motor") is None
+    assert "import's default" in signals.why_missing("armed")
+    [verdict] = [v for v in evaluate(SAFETY, signals) if v.name == "ends_landed_disarmed"]
+    assert verdict.status == MISSING and verdict.missing[0][0] == "armed"
+    assert builder.window(0, ["armed"]) is None
+
+
+def test_an_imported_bag_is_checked_from_its_first_message(tmp_path) -> None:
+    from aeroexec.bags.importer import import_bag
+
+    out = tmp_path / "bag.mcap"
+    import_bag(ROOT / "tests" / "fixtures" / "bags" / "aerostack_2017_first_view_ros1.bag", out)
+    report = check_recording(out, SAFETY)
+    assert 15.0 < report.duration_s < 17.0  # the bag's 16 s, not its epoch times
+    found = {v.name: v for v in report.verdicts}
+    # An Aerostack bag has no capability lists or activation calls: said, not guessed.
+    assert found["compatible_capabilities"].status == MISSING
+    assert found["activations_answered"].status == MISSING
+    assert found["ends_landed_disarmed"].status == HELD

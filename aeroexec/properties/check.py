@@ -40,6 +40,11 @@ SERVICES = frozenset({"activate_behavior", "default_values"})
 
 HELD, VIOLATED, MISSING = "held", "violated", "missing"
 
+#: Log times from this on (2001-09-09) are instants of the wall clock, as a ROS bag's are,
+#: not a session's clock (which starts at 0): such a recording is sampled from its first
+#: message, so t=0 is where it begins.
+ABSOLUTE_NS = 10**18
+
 
 @dataclass(frozen=True)
 class Verdict:
@@ -130,6 +135,7 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
     builder = SignalBuilder(None)
     wanted: dict[int, tuple[str, bool] | None] = {}
     last_ns = -1
+    origin: int | None = None
     # One pass: the recorder writes its attachments (the catalog) before any message.
     for message in recording.items():
         if not isinstance(message, RawMessage):
@@ -138,6 +144,9 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
                 if catalog is not None:
                     builder.use_catalog(catalog.conflicts_of)
             continue
+        if origin is None:
+            origin = message.log_time_ns if message.log_time_ns >= ABSOLUTE_NS else 0
+        t_ns = message.log_time_ns - origin
         channel = message.channel
         kind = wanted.get(channel.id, False)
         if kind is False:
@@ -146,7 +155,7 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
             use = name in SERVICES if is_call else name in TOPICS
             kind = wanted[channel.id] = (name, is_call) if use else None
         if kind is None:
-            last_ns = max(last_ns, message.log_time_ns)
+            last_ns = max(last_ns, t_ns)
             continue
         try:
             data = orjson.loads(message.data)
@@ -155,9 +164,9 @@ def signals_from_recording(path: str | os.PathLike[str]) -> Signals:
         name, is_call = kind
         if is_call:
             if isinstance(data, dict):
-                builder.call(name, message.log_time_ns, data.get("request"), data.get("response"))
+                builder.call(name, t_ns, data.get("request"), data.get("response"))
         else:
-            builder.topic(name, message.log_time_ns, data)
+            builder.topic(name, t_ns, data)
     if last_ns >= 0:
         builder.mark_time(last_ns)  # messages no signal reads still extend the session
     return builder.finish()

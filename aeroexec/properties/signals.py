@@ -112,6 +112,19 @@ _VEHICLE = frozenset(
 )
 
 
+#: The vehicle/state fields each vehicle signal is made from.
+_FIELDS_OF: dict[str, tuple[str, ...]] = {
+    "altitude": ("position",),
+    "distance_home": ("position",),
+    "speed": ("velocity",),
+    "battery": ("battery",),
+    "flying": ("flying",),
+    "landed": ("flying",),
+    "armed": ("armed",),
+    "link": ("fault",),
+    "grounded": ("fault",),
+}
+
 #: The vehicle signals made from the state rows (link and grounded are changes).
 _ROW_SIGNALS = ("altitude", "speed", "battery", "flying", "landed", "armed", "distance_home")
 
@@ -144,6 +157,8 @@ class Signals:
     values: Mapping[str, np.ndarray]
     #: Channels the session had (decides which per-name signals exist, as zeros).
     sources: frozenset[str]
+    #: vehicle/state fields the recording had only as an importer's defaults.
+    defaulted: frozenset[str] = frozenset()
 
     def times(self) -> list[float]:
         return [k * PERIOD_S for k in range(self.length)]
@@ -153,12 +168,18 @@ class Signals:
         found = self.values.get(name)
         if found is not None:
             return found
+        if name.startswith("fault_") and "fault" in self.defaulted:
+            return None
         for prefix, needs in _FAMILY_SOURCES.items():
             if name.startswith(prefix) and needs in self.sources:
                 return np.zeros(self.length)  # never active, never seen, never issued
         return None
 
     def why_missing(self, name: str) -> str:
+        fields = _FIELDS_OF.get(name, ("fault",) if name.startswith("fault_") else ())
+        guessed = [f for f in fields if f in self.defaulted]
+        if guessed:
+            return f"the recording's vehicle states lack {guessed[0]} (an import's default)"
         need = _SOURCE_OF.get(name)
         if need is None:
             for prefix, source in _FAMILY_SOURCES.items():
@@ -206,6 +227,8 @@ class SignalBuilder:
         #: (sample, x, y, z, speed, battery, flying, armed) per vehicle state.
         self._rows: list[tuple[int, float, float, float, float, float, float, float]] = []
         self._last_fault: Any = None
+        #: vehicle/state fields some state had only as an importer's default.
+        self._defaulted: set[str] = set()
         self._faults: set[str] = set()
 
     # -- input ------------------------------------------------------------------------------
@@ -313,7 +336,8 @@ class SignalBuilder:
             index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
             held = rows[index]
             for name in _ROW_SIGNALS:
-                values[name] = _vehicle_column(name, held, self._rows[0])
+                if not self._guessed(name):
+                    values[name] = _vehicle_column(name, held, self._rows[0])
             first_k = int(self._rows[0][0])
             for name in ("link", "grounded"):
                 if name in values and first_k >= start:
@@ -329,7 +353,15 @@ class SignalBuilder:
             if final:
                 end[-1] = 1.0
             values["end"] = end
-        return Signals(length, values, frozenset(self._sources))
+        for name in list(values):
+            if self._guessed(name):
+                del values[name]
+        return Signals(length, values, frozenset(self._sources), frozenset(self._defaulted))
+
+    def _guessed(self, name: str) -> bool:
+        """Whether `name` comes from a field the recording only had as a default."""
+        fields = _FIELDS_OF.get(name, ("fault",) if name.startswith("fault_") else ())
+        return any(f in self._defaulted for f in fields)
 
     def window(self, start: int, names: Iterable[str]) -> dict[str, np.ndarray] | None:
         """The samples from `start` to the last one of the signals `names`, as
@@ -343,6 +375,8 @@ class SignalBuilder:
         rows: np.ndarray | None = None
         for name in names:
             changes = self._changes.get(name)
+            if self._guessed(name):
+                return None
             if name in _ROW_SIGNALS:
                 if not self._rows:
                     return None
@@ -424,6 +458,9 @@ class SignalBuilder:
         except (KeyError, IndexError, TypeError):
             return  # a malformed state is no sample
         self._rows.append(row)
+        defaulted = data.get("defaulted")
+        if defaulted:  # a bag's import filled these in: not the vehicle's word
+            self._defaulted.update(d for d in defaulted if isinstance(d, str))
         if low and "low_battery" not in self._faults:
             self._fault(k, "low_battery")
         fault = data.get("fault") or ""
