@@ -32,6 +32,8 @@ import pytest
 from live_helpers import AeroexecProcess, free_tcp_port, free_udp_port, write_mission
 
 from aeroexec.mission.paths import APPENDIX_C
+from aeroexec.properties.check import check_recording
+from aeroexec.properties.spec import load_properties
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
@@ -273,6 +275,14 @@ def test_appendix_c_over_udp_lands_and_replays_unchanged(tmp_path: Path, flight:
     acks = [r["fields"] for r in topics["mavlink/rx"] if r["type"] == "COMMAND_ACK"]
     assert acks and all(a["result"] == 0 for a in acks)  # every command ACCEPTED
     assert_replays_unchanged(record)
+    # What aeroexec's semantics promise holds on the real autopilot's flight too.
+    safety = check_recording(record, load_properties(["aeroexec:safety"]))
+    assert {v.name: v.status for v in safety.verdicts} == {
+        "compatible_capabilities": "held",
+        "activations_answered": "held",
+        "ends_landed_disarmed": "held",
+        "grounded_lands": "held",
+    }
 
 
 LONGER = (
