@@ -355,6 +355,8 @@ def test_replay_check_passes_only_if_the_properties_hold(recordings, tmp_path) -
     assert "ceiling" in failure.get("message", "") or failure.text
     without_check = aeroexec("replay", rec, "--spec", str(spec))
     assert without_check.returncode == 0  # reported, but --check decides the exit code
+    sharded = aeroexec("replay", rec, "--spec", str(spec), "--shard", "1/1", "-f", "json")
+    assert sharded.returncode == 2 and "--spec with --shard" in sharded.stderr
     kept = tmp_path / "again.mcap"
     written = aeroexec("replay", rec, "--spec", str(spec), "-o", str(kept))
     assert f"{kept}: t=4.00s: error ceiling" in written.stdout
