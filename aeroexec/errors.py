@@ -106,3 +106,8 @@ class OutputLost(BaseException):
 class ReportError(AeroexecError):
     """A report to merge (a shard's JSON result) cannot be read, or the shards do not
     make one whole run."""
+
+
+class PropertyError(AeroexecError):
+    """A property file (signal temporal logic) cannot be read: bad YAML, a formula that
+    does not parse, a signal no recording has."""

@@ -18,6 +18,8 @@ from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
+from aeroexec.properties.monitor import PropertyMonitor
+from aeroexec.properties.spec import load_properties
 from aeroexec.viz.foxglove_layout import (
     foxglove_layout,
     generic_content,
@@ -52,7 +54,9 @@ _PATH = re.compile(r"^(/[\w/]+)(?:\{(\w+)=='([^']*)'\})?((?:\.\w+|\[\d+\])*)$")
 def session(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Any:
     drone = request.param
     path = tmp_path_factory.mktemp("layout") / f"{drone}.mcap"
-    simulate(SessionConfig(mission=APPENDIX_C, record=path, drone=drone))
+    # Monitored as `run --spec aeroexec:safety` is, so the properties channel is there too.
+    monitor = PropertyMonitor(load_properties(["aeroexec:safety"]))
+    simulate(SessionConfig(mission=APPENDIX_C, record=path, drone=drone), observers=[monitor])
     topics: dict[str, tuple[str, dict[str, Any], list[Any]]] = {}
     with open(path, "rb") as stream:
         for schema, channel, message in make_reader(stream).iter_messages():

@@ -32,6 +32,8 @@ import pytest
 from live_helpers import AeroexecProcess, free_tcp_port, free_udp_port, write_mission
 
 from aeroexec.mission.paths import APPENDIX_C
+from aeroexec.properties.check import check_recording
+from aeroexec.properties.spec import load_properties
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
@@ -273,6 +275,14 @@ def test_appendix_c_over_udp_lands_and_replays_unchanged(tmp_path: Path, flight:
     acks = [r["fields"] for r in topics["mavlink/rx"] if r["type"] == "COMMAND_ACK"]
     assert acks and all(a["result"] == 0 for a in acks)  # every command ACCEPTED
     assert_replays_unchanged(record)
+    # What aeroexec's semantics promise holds on the real autopilot's flight too.
+    safety = check_recording(record, load_properties(["aeroexec:safety"]))
+    assert {v.name: v.status for v in safety.verdicts} == {
+        "compatible_capabilities": "held",
+        "activations_answered": "held",
+        "ends_landed_disarmed": "held",
+        "grounded_lands": "held",
+    }
 
 
 LONGER = (
@@ -456,3 +466,47 @@ def test_sigkill_of_fly_leaves_it_to_the_autopilots_gcs_failsafe(
         fly.popen.wait(10)
         assert monitor.wait_for(lambda m: m.mode == LAND_MODE, timeout=30)
         assert monitor.down(timeout=60)
+
+
+# -- runtime assurance: fly --spec -------------------------------------------------------------
+
+GEOFENCE = """\
+properties:
+  - name: geofence
+    description: stay within 15 m of home
+    formula: always(distance_home <= 15)
+    action: land
+"""
+
+
+def test_a_geofence_in_fly_spec_lands_at_the_fence(tmp_path: Path, flight: Any) -> None:
+    """The property's action ends the flight with LAND where the fence is crossed, on the
+    real autopilot: not at the mission's target 60 m away."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(GEOFENCE, encoding="utf-8")
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        f"    api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG})\n"
+        "    api.executeBehavior('LAND')\n",
+    )
+    fly = flight(Fly, fly_args(mission, f"udpin:127.0.0.1:{port}", record, "--spec", str(spec)))
+    sitl = flight(Sitl, tmp_path, serial0=f"udpclient:127.0.0.1:{port}", params=SLOW)
+    code, out, err = fly.finish()
+
+    assert code == 1, err  # the property was violated
+    assert "error geofence: stay within 15 m of home: violated" in out
+    assert "mission stopped: property geofence violated at" in err
+    assert "ending: switched to LAND" in out
+    monitor = flight(Monitor, sitl)
+    assert monitor.down(timeout=60) and monitor.mode == LAND_MODE
+    assert monitor.wait_for(lambda m: m.position is not None, 10)
+    assert monitor.position is not None
+    distance = (monitor.position[0] ** 2 + monitor.position[1] ** 2) ** 0.5
+    assert 15.0 < distance < 25.0, monitor.position  # at the fence, not at 60 m
+    complete, topics = recorded(record)
+    assert complete
+    [early, *_] = topics["properties"]
+    assert early["property"] == "geofence" and early["action"] == "land"

@@ -14,15 +14,19 @@ import pytest
 from aeroexec.catalog import read_catalog
 from aeroexec.catalog.formats import read_any_catalog
 from aeroexec.catalog.model import Severity
+from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.plugins import BehaviorSet, BehaviorSources, discover
+from aeroexec.properties.spec import load_properties
 from aeroexec.verifier import Finding, Rule, all_rules, check_mission
 from aeroexec.verifier.engine import check_any_catalog
 from aeroexec.verifier.missions import read_mission
+from aeroexec.verifier.signals import SignalUse, check_signal_uses
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "verifier"
 RULES = FIXTURES / "rules"
 TASKS = FIXTURES / "tasks"
 MISSIONS = FIXTURES / "missions"
+PROPERTIES = FIXTURES / "properties"
 MISSION_CATALOG = MISSIONS / "catalog.yaml"
 CODE_BEHAVIORS = FIXTURES / "code_behaviors.py"
 #: Rules that fire on every catalog (the dialect notes): they have no clean fixture.
@@ -48,6 +52,8 @@ def expectations(path: Path) -> dict[str, set[Place]]:
 
 
 def fixture_for(rule: Rule, clean: bool = False) -> Path:
+    if rule.kind == "property":
+        return PROPERTIES / f"{rule.code}{'.clean' if clean else ''}.yaml"
     if rule.kind == "mission":
         return MISSIONS / f"{rule.code}{'.clean' if clean else ''}.py"
     folder = TASKS if rule.code.startswith("AX8") else RULES
@@ -70,6 +76,10 @@ def mission_catalog(path: Path) -> Path:
 
 
 def findings_of(path: Path, rule: Rule | None = None) -> list[Finding]:
+    if path.parent == PROPERTIES:  # a property file, against the default catalog
+        props = load_properties([str(path)]).properties
+        uses = [SignalUse(name, mark) for p in props for name, mark in p.formula.uses]
+        return check_signal_uses(uses, read_catalog(DEFAULT_CATALOG))
     if path.suffix == ".py":
         return check_mission(read_mission(path), read_catalog(mission_catalog(path)))
     behaviors = code_behaviors() if rule is not None and rule.kind == "code" else None

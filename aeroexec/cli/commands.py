@@ -71,6 +71,11 @@ COMMANDS: dict[str, CommandEntry] = {
         "(within --tolerance), the final vehicle state; and the commands only one of them "
         "has (the mission took another path).",
     ),
+    "check": CommandEntry(
+        "check_cmd",
+        "Check recordings against properties in signal temporal logic (STL): what must "
+        "always hold in a flight, such as `always(altitude <= 120)`.",
+    ),
     "report": CommandEntry(
         "report_cmd",
         "Work with replay reports: merge the shards of a CI matrix into one.",

@@ -36,6 +36,8 @@ from aeroexec.cli.project import (
     project_behaviors,
 )
 from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome, silenced
+from aeroexec.cli.spec import SpecOption, monitor_for, print_verdicts
+from aeroexec.executive.bus import BusObserver
 from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
@@ -147,6 +149,7 @@ def fly_command(
     ),
     disable_plugin: DisablePluginOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
+    spec: SpecOption = None,
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
     color: Color = color_option(),
@@ -189,11 +192,14 @@ def fly_command(
         allow_unimplemented=allow_unimplemented,
         baud=baud,
     )
-    printer = [] if quiet else [ActivityLog(on_change=print_row)]
+    monitor = monitor_for(spec, live=True)
+    observers: list[BusObserver] = [] if quiet else [ActivityLog(on_change=print_row)]
+    if monitor is not None:
+        observers.append(monitor)
     with silenced(quiet):
         result = fly(
             config,
-            observers=printer,
+            observers=observers,
             on_listening=_listening,
             on_connected=_connected,
             announce=error_line,
@@ -206,8 +212,11 @@ def fly_command(
         typer.echo(f"ending: vehicle {result.ending.last_seen}")
     # The flight's own ending says what became of the vehicle (last, in one line): the
     # simulator's "vehicle lost" verdict is not needed here.
+    violated = False
+    if monitor is not None:
+        violated = print_verdicts(monitor.verdicts, result.recording or str(mission))
     mission_ok = report_outcome(result, debug, vehicle=False)
     if not result.safe:
         error_line(f"{running()}: {result.problem()}")
-    if not (mission_ok and result.safe):
+    if not (mission_ok and result.safe) or violated:
         raise typer.Exit(1)

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import sys
+import tempfile
 import time
 from enum import Enum
 from pathlib import Path
@@ -34,6 +36,14 @@ from aeroexec.cli.project import (
     discovered_behaviors,
     project,
 )
+from aeroexec.cli.spec import (
+    SpecOption,
+    check_recording,
+    load_spec,
+    verdicts_text,
+    with_verdicts_json,
+    with_verdicts_junit,
+)
 from aeroexec.errors import AeroexecError, Mark, RecordingError
 from aeroexec.mission.script import load_mission
 from aeroexec.progress import ProgressFactory, progress_bar
@@ -48,6 +58,8 @@ from aeroexec.replay.tasks import retried
 
 if TYPE_CHECKING:
     from rich.progress import Progress
+
+    from aeroexec.properties.spec import PropertySet
 
 #: One recording at least this big gets bars for its read and replay (~2 s of work: a
 #: 10-minute simulated patrol is ~1 MB and replays in ~0.4 s).
@@ -167,8 +179,13 @@ def replay(
     out_dir: str | None = deprecated_option("--out-dir", instead="--output-dir", metavar="DIR"),
     check: Annotated[
         bool,
-        typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
+        typer.Option(
+            "--check",
+            help="Exit 1 when any replay differs from its recording (or, with --spec, "
+            "violates a property).",
+        ),
     ] = False,
+    spec: SpecOption = None,
     jobs: int = jobs_option(
         "Replay this many recordings at once, in worker processes on this machine (at most "
         "one per CPU; --executor local)."
@@ -241,8 +258,11 @@ def replay(
       aeroexec replay recordings/ --shard 2/4 --format json > shard-2.json
       aeroexec replay s3://flights/2024/ --executor ray://head:10001 --check
 
+    With --spec, every replay is also checked against properties (docs/properties.md):
+    with --check a replay passes only if they hold.
+
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
-    differs; 2 an input could not be read (one line on stderr each).
+    differs or violates a property; 2 an input could not be read (one line on stderr each).
     """
     apply_timeout(timeout)
     out_dir = replaced(output_dir, out_dir, new_name="--output-dir", old_name="--out-dir")
@@ -255,6 +275,97 @@ def replay(
     discovered_behaviors(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
+    if spec and shard is not None:
+        # `report merge` does not carry the shards' property verdicts yet: a merged
+        # --check would pass a violation.
+        raise AeroexecError(
+            "--spec with --shard is not supported yet (report merge drops the verdicts)"
+        )
+    properties = load_spec(spec)  # so is a bad property file
+    with contextlib.ExitStack() as scratch:
+        kept = True
+        if properties is not None and output is None and out_dir is None:
+            if executor.startswith("ray://"):
+                raise AeroexecError("--spec checks each replay's recording: not on a cluster")
+            # The properties are checked on each replay's recording: write them somewhere.
+            out_dir = scratch.enter_context(tempfile.TemporaryDirectory(prefix="aeroexec-"))
+            kept = False
+        _replay(
+            _Run(
+                recordings=recordings,
+                catalog=catalog,
+                mode=mode,
+                output=output,
+                out_dir=out_dir,
+                check=check,
+                jobs=jobs,
+                sources=sources,
+                shard=shard,
+                executor=executor,
+                output_format=output_format,
+                tolerance=tolerance,
+                position_tolerance=position_tolerance,
+                mission=mission,
+                trust_recording=trust_recording,
+                timing=timing,
+                started=started,
+                properties=properties,
+                kept=kept,
+            )
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class _Run:
+    """What `replay` was asked, checked: the input of `_replay`."""
+
+    recordings: list[str]
+    catalog: Path | None
+    mode: Mode | None
+    output: str | None
+    out_dir: str | None
+    check: bool
+    jobs: int
+    sources: Any
+    shard: str | None
+    executor: str
+    output_format: OutputFormat
+    tolerance: float
+    position_tolerance: float
+    mission: Path | None
+    trust_recording: bool
+    timing: Any
+    started: float
+    properties: PropertySet | None
+    #: The outputs are the user's (else a scratch directory for --spec, not reported).
+    kept: bool
+
+
+def _replay(run: _Run) -> None:
+    (recordings, catalog, mode, output, out_dir, check, jobs, sources, shard, executor) = (
+        run.recordings,
+        run.catalog,
+        run.mode,
+        run.output,
+        run.out_dir,
+        run.check,
+        run.jobs,
+        run.sources,
+        run.shard,
+        run.executor,
+    )
+    output_format, tolerance, position_tolerance = (
+        run.output_format,
+        run.tolerance,
+        run.position_tolerance,
+    )
+    mission, trust_recording, timing, started = (
+        run.mission,
+        run.trust_recording,
+        run.timing,
+        run.started,
+    )
+    properties, kept = run.properties, run.kept
     options = ReplayOptions(
         catalog=str(catalog) if catalog is not None else None,
         mode=mode,
@@ -307,15 +418,30 @@ def replay(
     again = retried(results)
     if again:
         error_line(f"note: retried after a worker failure: {', '.join(again)}")
+    checked = []
+    if properties is not None:
+        for result in results:
+            if result.output is not None:
+                report = check_recording(result.output, properties)
+                # Named after what the user gave: the replay of that recording.
+                name = result.output if kept else f"{result.recording} (replay)"
+                checked.append(dataclasses.replace(report, recording=name))
+        if not kept:  # a scratch directory's files are gone when this returns
+            results = [dataclasses.replace(r, output=None) for r in results]
     if output_format is OutputFormat.json:
-        typer.echo(replay_json(results) if part is None else shard_json(results, part))
+        document = replay_json(results) if part is None else shard_json(results, part)
+        typer.echo(with_verdicts_json(document, checked) if properties is not None else document)
     elif output_format is OutputFormat.junit:
-        typer.echo(replay_junit(results, timing=timing, seconds=time.perf_counter() - started))
+        document = replay_junit(results, timing=timing, seconds=time.perf_counter() - started)
+        typer.echo(with_verdicts_junit(document, checked) if properties is not None else document)
     else:
         text = replay_text(results)
         if text:
             typer.echo(text)
+        if properties is not None:
+            typer.echo(verdicts_text(checked), nl=False)
     if any(r.error is not None for r in results):
         raise typer.Exit(2)
-    if check and not all(r.equal for r in results):
+    violated = any(report.failed for report in checked)
+    if check and (violated or not all(r.equal for r in results)):
         raise typer.Exit(1)

@@ -35,7 +35,9 @@ from aeroexec.cli.project import (
     project,
     project_behaviors,
 )
+from aeroexec.cli.spec import SpecOption, monitor_for, print_verdicts
 from aeroexec.cli.tables import print_table
+from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import NS_PER_S
 from aeroexec.mission.activity import Activation, ActivityLog, format_arguments
 from aeroexec.mission.script import Ending
@@ -141,6 +143,7 @@ def run(
         "(default: 24 h; 0: no limit). Recorded as the reason the session ended.",
         show_default=False,
     ),
+    spec: SpecOption = None,
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
     color: Color = color_option(),
@@ -175,17 +178,26 @@ def run(
         allow_unimplemented=allow_unimplemented,
         max_sim_time_s=max_sim_time or None,
     )
-    printer = [] if quiet else [ActivityLog(on_change=print_row, on_fault=print_fault)]
+    monitor = monitor_for(spec)
+    observers: list[BusObserver] = (
+        [] if quiet else [ActivityLog(on_change=print_row, on_fault=print_fault)]
+    )
+    if monitor is not None:
+        observers.append(monitor)
     with silenced(quiet):
-        result = simulate(config, observers=printer, announce=error_line)
+        result = simulate(config, observers=observers, announce=error_line)
     print_summary(result, styled=use_color(color))
-    finish(result, debug)
+    violated = False
+    if monitor is not None:
+        violated = print_verdicts(monitor.verdicts, result.recording or str(mission))
+    finish(result, debug, violated)
 
 
-def finish(result: SessionResult, debug: bool) -> None:
+def finish(result: SessionResult, debug: bool, violated: bool = False) -> None:
     """Say where the recording is, and exit 1 (with the reason, at the mission's own
-    file:line) if the mission did not end well or lost its vehicle."""
-    if not report_outcome(result, debug, vehicle=True):
+    file:line) if the mission did not end well, lost its vehicle or violated a
+    property of --spec."""
+    if not report_outcome(result, debug, vehicle=True) or violated:
         raise typer.Exit(1)
 
 
@@ -203,6 +215,9 @@ def report_outcome(result: SessionResult, debug: bool, vehicle: bool) -> bool:
             error_line(f"{where}mission stopped: {outcome.error} (--max-sim-time)")
         elif outcome.ending is Ending.TIMEOUT:
             error_line(f"{where}mission stopped: {outcome.error}")
+        elif outcome.ending is Ending.STOPPED:
+            done = "; ".join(getattr(result, "assurance", ()) or ())
+            error_line(f"mission stopped: {outcome.error}" + (f" ({done})" if done else ""))
         else:
             error_line(f"{where}mission failed: {outcome.error}")
         return False

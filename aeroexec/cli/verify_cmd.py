@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from enum import Enum
 
@@ -27,11 +28,14 @@ from aeroexec.cli.project import (
     project,
     project_behaviors,
 )
+from aeroexec.cli.spec import SpecOption
 from aeroexec.errors import AeroexecError
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
+from aeroexec.verifier.findings import InputError
 from aeroexec.verifier.registry import all_rules, get, suggest_code
 from aeroexec.verifier.report import render
+from aeroexec.verifier.signals import SignalUse
 
 HELP = """Check behavior catalogs and mission scripts offline, before they fly.
 
@@ -54,6 +58,10 @@ catalog is also checked against that code (AX9xx: behaviors without an implement
 argument names the code does not read), and witnesses are completed to happen with the
 real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catalog.
 
+Property files given with --spec (docs/properties.md) are read and their signals
+checked against each behavior catalog (AX75x: behaviors, capabilities and faults that
+do not exist); a formula that does not parse is an input that cannot be read.
+
 \b
 Examples:
   aeroexec verify catalog/default.yaml
@@ -61,6 +69,7 @@ Examples:
   aeroexec verify config/mission/behavior_catalog.yaml  # 2020-2021 tasks
   aeroexec verify catalog/default.yaml -m mission.py --world worlds/field.yaml
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
+  aeroexec verify catalog/default.yaml --spec spec.yaml
   aeroexec verify my-catalog.yaml -b mybehaviors
   aeroexec verify --list-rules
   aeroexec verify --explain AX304
@@ -129,6 +138,7 @@ def verify_command(
         help="List every rule (code, severity, name, by area) and exit; with -f json, "
         "their documentation too.",
     ),
+    spec: SpecOption = None,
     color: Color = color_option(),
     behaviors: BehaviorsOption = None,
     timeout: float | None = timeout_option(
@@ -160,7 +170,16 @@ def verify_command(
     found = project_behaviors(behaviors, settings, disable_plugin)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
-    report = verify(catalogs, mission, world=limits, behaviors=found if found.declared else None)
+    uses, spec_errors = signal_uses(spec or [])
+    report = verify(
+        catalogs,
+        mission,
+        world=limits,
+        behaviors=found if found.declared else None,
+        signals=uses,
+    )
+    if spec_errors:
+        report = dataclasses.replace(report, input_errors=(*report.input_errors, *spec_errors))
     shown = report.at_least(threshold)
     styled = use_color(color)
     text = render(shown, fmt, witness=witness, color=styled)
@@ -169,6 +188,27 @@ def verify_command(
         error_line(str(error))
     # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))
+
+
+def signal_uses(specs: list[str]) -> tuple[list[SignalUse], list[InputError]]:
+    """Each use of a signal in the property files `specs` (with its place), and the
+    files that could not be read (an unknown signal or a syntax error is one of those:
+    one line at its file:line:col, exit 2, the rest verified all the same)."""
+    if not specs:
+        return [], []
+    from aeroexec.properties.spec import load_properties
+
+    uses: list[SignalUse] = []
+    errors: list[InputError] = []
+    for spec in specs:
+        try:
+            properties = load_properties([spec])
+        except AeroexecError as exc:
+            errors.append(InputError.of(exc, spec))
+            continue
+        for prop in properties.properties:
+            uses.extend(SignalUse(name, mark) for name, mark in prop.formula.uses)
+    return uses, errors
 
 
 def rules_listing(output_format: VerifyFormat) -> str:

@@ -49,6 +49,18 @@ class TimeLimitReached(BaseException):
         super().__init__(f"the simulated time limit of {_seconds_text(limit_ns)} was reached")
 
 
+class StopRequested(BaseException):
+    """An observer asked the session to end (`Executive.request_stop`): a property
+    monitor whose property was violated, with the action that ends the flight.
+
+    A `BaseException` for the reason `TimeLimitReached` is one."""
+
+    def __init__(self, reason: str, action: str) -> None:
+        self.reason = reason
+        self.action = action
+        super().__init__(reason)
+
+
 def _seconds_text(ns: int) -> str:
     seconds = ns / NS_PER_S
     if seconds >= 3600 and seconds % 3600 == 0:
@@ -108,6 +120,9 @@ class Executive:
         #: The clock time at which `step()` refuses to go on (`TimeLimitReached`): a
         #: mission that never ends must not run forever. None: no limit.
         self.time_limit_ns: int | None = None
+        #: (reason, action) once an observer asked the session to end; the next tick
+        #: boundary raises `StopRequested` (never inside a publish or a record).
+        self.stop_request: tuple[str, str] | None = None
         self._feed_beliefs()
         self.initiation = self.bus.call(
             "initiate_behaviors",
@@ -123,6 +138,11 @@ class Executive:
 
     def inhibit_behavior(self, name: str, caller: str = "mission") -> ServiceResult:
         return self.coordinator.inhibit_behavior(name, caller)
+
+    def request_stop(self, reason: str, action: str) -> None:
+        """End the session at the next tick boundary (the first request wins)."""
+        if self.stop_request is None:
+            self.stop_request = (reason, action)
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -147,6 +167,8 @@ class Executive:
         check_interrupts()
         if self.time_limit_ns is not None and self.clock.now_ns() >= self.time_limit_ns:
             raise TimeLimitReached(self.time_limit_ns)
+        if self.stop_request is not None:
+            raise StopRequested(*self.stop_request)
         clock = self.clock
         clock.advance()
         self.vehicle.step(clock.tick_ns / NS_PER_S)

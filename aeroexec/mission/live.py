@@ -34,14 +34,18 @@ from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.ending import ON_EXIT, Ending, OnExit, end_flight
+from aeroexec.mission.script import Ending as ScriptEnding
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.mission.session import (
     SessionResult,
+    end_observing,
     session_code,
     session_observers,
     stand_in_metadata,
+    start_observing,
 )
 from aeroexec.plugins.discovery import BehaviorSet
+from aeroexec.vehicles.base import VehicleCommandError
 from aeroexec.vehicles.mavlink.codec import signing_key
 from aeroexec.vehicles.mavlink.endpoint import (
     DEFAULT_BAUD,
@@ -154,6 +158,7 @@ def fly(
     the link opens; no heartbeat raises `MavlinkError` before any recording file is
     created. `announce` is told each stand-in once, before the link opens. A signal
     (`Interrupted`) is re-raised after the ending, with what was done in its notes."""
+    observers = list(observers)
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
     code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
@@ -212,6 +217,7 @@ def fly(
         )
         vehicle.tap = executive.bus.publish  # hands over the traffic of the connection too
         executive.publish_vehicle_state()  # what the mission starts from (replay needs it)
+        start_observing(observers, executive)
         api = MissionAPI(executive)
         outcome = MissionOutcome(False, None, "the mission did not end")
         try:
@@ -234,9 +240,18 @@ def fly(
         executive.bus.publish(
             "mavlink/link", {"event": "mission_end", "url": vehicle.endpoint.url, "how": how}
         )
-        ending = end_flight(
-            executive, api, vehicle, config.on_exit, link_timeout=config.link_timeout
-        )
+        on_exit = config.on_exit
+        if outcome.ending is ScriptEnding.STOPPED and executive.stop_request is not None:
+            # A violated property's action (`fly --spec`) decides how the flight ends.
+            action = executive.stop_request[1]
+            executive.stop_request = None  # honoured: the ending steps on
+            if action == "rtl":
+                with contextlib.suppress(VehicleCommandError):
+                    executive.log(f"property action rtl: {vehicle.return_home()}", "WARNING")
+                on_exit = "land"  # then wait, as for a landing, for it to be down
+            elif action in ("land", "hold"):
+                on_exit = action  # type: ignore[assignment]
+        ending = end_flight(executive, api, vehicle, on_exit, link_timeout=config.link_timeout)
         with contextlib.suppress(LinkTimeout):
             vehicle.step(0.0)  # what arrived since the last tick is recorded too
         executive.bus.publish(
@@ -251,6 +266,7 @@ def fly(
             },
         )
         executive.bus.publish("mavlink/stats", lambda: _stats(vehicle))
+        end_observing(observers, executive)
     finally:
         if recorder is not None:
             recorder.close()

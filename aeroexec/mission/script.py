@@ -20,7 +20,7 @@ from types import CodeType
 from typing import Any
 
 from aeroexec.errors import AeroexecError, Mark, MissionError, one_line
-from aeroexec.executive.executive import TimeLimitReached
+from aeroexec.executive.executive import StopRequested, TimeLimitReached
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import TimedOut, deadline, user_code
 from aeroexec.interrupts import handling as handling_signals
@@ -47,6 +47,7 @@ class Ending(str, Enum):
     EXITED = "exited"  # the mission called sys.exit()
     TIME_LIMIT = "max_sim_time"
     TIMEOUT = "timeout"  # ran past its wall-clock limit (--timeout)
+    STOPPED = "property"  # a violated property's action ended it (`--spec`)
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +174,10 @@ def _run(
     except TimedOut as exc:
         return MissionOutcome(
             False, None, str(exc), traceback.format_exc(), Ending.TIMEOUT, _where(exc, script)
+        )
+    except StopRequested as exc:
+        return MissionOutcome(
+            False, None, exc.reason, traceback.format_exc(), Ending.STOPPED, _where(exc, script)
         )
     except SystemExit as exc:
         where = _where(exc, script)

@@ -25,7 +25,14 @@ from aeroexec.inputs import read_text
 from aeroexec.interrupts import Interrupted
 from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
-from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
+from aeroexec.mission.assurance import carry_out
+from aeroexec.mission.script import (
+    Ending,
+    MissionOutcome,
+    MissionScript,
+    load_mission,
+    run_script,
+)
 from aeroexec.plugins.discovery import STAND_IN, BehaviorSet, standard_set
 from aeroexec.plugins.manifest import code_manifest
 from aeroexec.recording.schemas import CODE_METADATA_NAME as CODE_RECORD
@@ -67,6 +74,8 @@ class SessionResult:
     metadata: dict[str, str] = field(default_factory=dict)
     #: (clock ns, fault) each time the vehicle's fault changed ('' when it cleared).
     faults: tuple[tuple[int, str], ...] = ()
+    #: What ended the flight after a violated property's action (`run --spec`).
+    assurance: tuple[str, ...] = ()
 
     @property
     def vehicle_lost(self) -> str:
@@ -181,6 +190,7 @@ def simulate(
     `catalog`, `script` and `world` ((text, name)) override what `config` names: replay
     passes the ones recorded in a session's attachments. `announce` is told each
     stand-in (with `config.allow_unimplemented`) once, before the session starts."""
+    observers = list(observers)
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
     code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
@@ -224,7 +234,16 @@ def simulate(
         )
         if config.max_sim_time_s is not None:
             executive.time_limit_ns = round(config.max_sim_time_s * NS_PER_S)
-        outcome = run_script(script, MissionAPI(executive))
+        start_observing(observers, executive)
+        api = MissionAPI(executive)
+        outcome = run_script(script, api)
+        assurance: list[str] = []
+        if outcome.ending is Ending.STOPPED and executive.stop_request is not None:
+            start = vehicle.world.start
+            assurance = carry_out(
+                executive, api, vehicle, executive.stop_request[1], (start[0], start[1])
+            )
+        end_observing(observers, executive)
         if recorder is not None:
             end_recording(recorder, outcome.ending.value, outcome.error, vehicle.state().fault)
     return SessionResult(
@@ -235,7 +254,25 @@ def simulate(
         recording=str(config.record) if config.record is not None else None,
         metadata=metadata,
         faults=tuple(activity.faults),
+        assurance=tuple(assurance),
     )
+
+
+def start_observing(observers: Iterable[BusObserver], executive: Executive) -> None:
+    """Hand the executive to the observers that act on it (a property monitor asks it to
+    stop with `request_stop`): those with a `session_started(executive)` method."""
+    for observer in observers:
+        started = getattr(observer, "session_started", None)
+        if started is not None:
+            started(executive)
+
+
+def end_observing(observers: Iterable[BusObserver], executive: Executive) -> None:
+    """Tell those observers the session ends, while it can still publish (and record)."""
+    for observer in observers:
+        ending = getattr(observer, "session_ending", None)
+        if ending is not None:
+            ending(executive)
 
 
 @contextmanager

@@ -49,6 +49,7 @@ BELIEF_CHANGE = "aeroexec.BeliefChange"
 MISSION_COMMAND = "aeroexec.MissionCommand"
 VEHICLE_STATE = "aeroexec.VehicleState"
 GENERIC_TOPIC = "aeroexec.Topic"
+PROPERTY_VERDICT = "aeroexec.PropertyVerdict"
 FOXGLOVE_LOG = "foxglove.Log"
 FOXGLOVE_FRAME_TRANSFORM = "foxglove.FrameTransform"
 FOXGLOVE_SCENE_UPDATE = "foxglove.SceneUpdate"
@@ -219,6 +220,24 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     GENERIC_TOPIC: _object(
         GENERIC_TOPIC, "A topic of the executive without a dedicated schema.", {}, []
     ),
+    PROPERTY_VERDICT: _object(
+        PROPERTY_VERDICT,
+        "A property of run/fly --spec (docs/properties.md): violated (when seen during the "
+        "session, or at its end) or its final verdict; t_s is when the first violating "
+        "interval starts.",
+        {
+            "property": {"type": "string"},
+            "status": {"type": "string"},
+            "severity": {"type": "string"},
+            "t_s": {"type": "number"},
+            "end_s": {"type": "number"},
+            "robustness": {"type": "number"},
+            "action": {"type": "string"},
+            "defined_at": {"type": "string"},
+            "message": {"type": "string"},
+        },
+        ["property", "status"],
+    ),
     FOXGLOVE_LOG: {
         "title": FOXGLOVE_LOG,
         "description": "A log message",
@@ -261,6 +280,7 @@ TOPIC_SCHEMAS: dict[str, str] = {
     "scene/static": FOXGLOVE_SCENE_UPDATE,
     "log": FOXGLOVE_LOG,
     "call_log": FOXGLOVE_LOG,
+    "properties": PROPERTY_VERDICT,
 }
 
 #: foxglove.LogLevel values by name (Python's logging names included).

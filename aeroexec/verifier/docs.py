@@ -49,12 +49,13 @@ do not edit by hand. `aeroexec verify --list-rules` lists them, `aeroexec verify
 CODE` prints the same text.
 
 Codes by range: AX1xx are reported by the catalog loader and passed through by the
-verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility;
-AX5xx start order; AX6xx behavior properties; AX7xx missions (`--mission`); AX8xx the
-Aerostack 4.x task catalogs of 2020-2021 (AX80x from their loader, AX81x-AX82x rules,
-judged as the 2021 constraint-based coordinator, cvar-upm/coordinator_cbc, would); AX9xx
-the catalog against the behavior code that runs it (when the project declares its
-behaviors: `--behaviors`, `[tool.aeroexec] behaviors`, entry points).
+verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility; AX5xx
+start order; AX6xx behavior properties; AX7xx missions (`--mission`; AX75x the signals
+of their property files, `--spec`); AX8xx the Aerostack 4.x task catalogs of 2020-2021
+(AX80x from their loader, AX81x-AX82x rules, judged as the 2021 constraint-based
+coordinator, cvar-upm/coordinator_cbc, would); AX9xx the catalog against the behavior
+code that runs it (when the project declares its behaviors: `--behaviors`,
+`[tool.aeroexec] behaviors`, entry points).
 Rules marked *witness* attach, where one exists, the shortest activation sequence that
 makes the problem happen in the executive (`--witness`, and `witness` in JSON/SARIF);
 for task catalogs, the shortest `start_task` sequence on a model of that coordinator.

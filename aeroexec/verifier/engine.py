@@ -27,6 +27,7 @@ from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
+from aeroexec.verifier.signals import SignalUse, check_signal_uses
 
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
@@ -185,6 +186,7 @@ def verify(
     world: World | None = None,
     library: Library | None = None,
     behaviors: BehaviorSet | None = None,
+    signals: Sequence[SignalUse] = (),
 ) -> Report:
     """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
     the mission scripts (paths, glob patterns or parsed scripts) that use them; every
@@ -194,12 +196,13 @@ def verify(
     An input that cannot be read becomes an `InputError` of the report (exit code 2)
     and the rest are verified all the same. `world` (the vehicle's limits) and `library`
     (the behavior implementations, for their declared situations and destinations)
-    default to the built-in world and the standard library.
+    default to the built-in world and the standard library. `signals`: the uses of
+    signals in property files (`verify --spec`), checked against every behavior catalog.
     """
     # The rules build graphs and indexes as large as the catalog: no cyclic garbage
     # worth the collector's passes over everything already loaded.
     with paused_gc():
-        return _verify(catalogs, missions, world, library, behaviors)
+        return _verify(catalogs, missions, world, library, behaviors, signals)
 
 
 def _verify(
@@ -208,6 +211,7 @@ def _verify(
     world: World | None,
     library: Library | None,
     behaviors: BehaviorSet | None,
+    signals: Sequence[SignalUse] = (),
 ) -> Report:
     if library is None and behaviors is not None:
         library = behaviors.library()
@@ -225,10 +229,11 @@ def _verify(
     # checked against the behavior catalogs.
     if scripts:
         from aeroexec.verifier.missions import check_mission
-    for catalog in behavior_catalogs:
+    for index, catalog in enumerate(behavior_catalogs):
         note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:
             findings.extend(check_mission(script, catalog, note, library=library, world=world))
+        findings.extend(check_signal_uses(signals, catalog, note, faults=index == 0))
     return Report(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),

@@ -5,7 +5,8 @@ Three kinds of entries:
 * `loader` — diagnostics the catalog loader already emits (AX1xx, from
   `aeroexec.catalog.codes`); the verifier passes them through and documents them here;
 * `catalog` — rules over a loaded catalog and its graphs (AX2xx-AX6xx);
-* `mission` — checks of mission scripts against a catalog (AX7xx);
+* `mission` — checks of mission scripts against a catalog (AX70x-AX71x);
+* `property` — property files' signals against a catalog (AX75x, `verify --spec`);
 * `task` — rules over an Aerostack 4.x task catalog (AX81x-AX82x; its loader's
   diagnostics are AX80x, from `aeroexec.catalog.task_codes`).
 * `code` — the catalog against the behavior implementations that would run it (AX9xx,
@@ -13,8 +14,8 @@ Three kinds of entries:
 
 Codes by range: AX1xx loading, AX2xx references, AX3xx capability consistency,
 AX4xx incompatibility, AX5xx start order, AX6xx behavior properties (recurrent/timeout,
-argument specs), AX7xx missions, AX8xx task catalogs (2020-2021), AX9xx catalog against
-code.
+argument specs), AX7xx missions (AX75x their property files), AX8xx task catalogs
+(2020-2021), AX9xx catalog against code.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ CatalogCheck = Callable[["CatalogGraphs"], Iterable[Finding]]
 CodeCheck = Callable[["CatalogGraphs", "BehaviorSet"], Iterable[Finding]]
 TaskCheck = Callable[["TaskContext"], Iterable[Finding]]
 
-KINDS = ("loader", "catalog", "mission", "task", "code")
+KINDS = ("loader", "catalog", "mission", "property", "task", "code")
 
 AREAS = {
     "AX1": "Loading (reported by the catalog loader)",
@@ -47,7 +48,7 @@ AREAS = {
     "AX4": "Incompatibility",
     "AX5": "Start order",
     "AX6": "Behavior properties",
-    "AX7": "Missions",
+    "AX7": "Missions and their properties",
     "AX8": "Task catalogs (Aerostack 4.x, 2020-2021)",
     "AX9": "Catalog against code",
 }
@@ -134,6 +135,11 @@ def mission_rule(code: str, name: str, severity: Severity, doc: str) -> Rule:
     return register(Rule(code, name, severity, " ".join(doc.split()), "mission"))
 
 
+def property_rule(code: str, name: str, severity: Severity, doc: str) -> Rule:
+    """A check of a property file's signals against a catalog (`verify --spec`)."""
+    return register(Rule(code, name, severity, " ".join(doc.split()), "property"))
+
+
 #: Severity of each loader diagnostic as `aeroexec.catalog.loader` emits it.
 _LOADER_SEVERITY = {
     codes.MISSING_ERROR_TAG: Severity.ERROR,
@@ -163,6 +169,7 @@ _RULE_MODULES: dict[str, tuple[str, ...]] = {
     "catalog": ("aeroexec.verifier.rules",),
     "code": ("aeroexec.verifier.rules",),
     "mission": ("aeroexec.verifier.missions",),
+    "property": ("aeroexec.verifier.signals",),
     "task": ("aeroexec.verifier.task_rules",),
 }
 

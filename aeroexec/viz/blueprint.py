@@ -46,11 +46,10 @@ def _scene(layouts: list[Layout]) -> rrb.Spatial3DView:
 
 
 def _behaviors(layouts: list[Layout]) -> rrb.StateTimelineView:
-    return rrb.StateTimelineView(
-        name="Behaviors",
-        origin="/",
-        contents=[f"+ {layout.behaviors_state}/**" for layout in layouts],
-    )
+    """One lane per behavior, and one per violated property (run/fly --spec) under them."""
+    contents = [f"+ {layout.behaviors_state}/**" for layout in layouts]
+    contents += [f"+ {layout.properties}/**" for layout in layouts]
+    return rrb.StateTimelineView(name="Behaviors", origin="/", contents=contents)
 
 
 def _logs(layout: Layout, several: bool) -> list[rrb.View]:

@@ -41,6 +41,8 @@ from aeroexec.viz.scene import log_series_style
 
 #: Report progress every this many records.
 PROGRESS_EVERY = 256
+#: The executive's tick: a property's violating interval covers its last tick too.
+PROPERTY_TICK_NS = 100_000_000
 
 ProgressCallback = Callable[[int], None]
 
@@ -97,6 +99,8 @@ class SessionConverter:
         self._styled: set[str] = set()
         #: entity -> (time, value) of its last row
         self._last_values: dict[str, tuple[int, float]] = {}
+        #: property -> the end (ns) of its violating interval marked so far
+        self._violations: dict[str, int] = {}
         self.stats = ConvertStats()
 
     # -- dispatch ------------------------------------------------------------------------
@@ -252,6 +256,30 @@ class SessionConverter:
     def _belief(self, data: Any, t: int) -> None:
         self._text_row(self._layout.beliefs, texts.belief_row(data), t)
 
+    def _property(self, data: Any, t: int) -> None:
+        """A violated property (the `properties` channel of run/fly --spec): an error at
+        the start of its first violating interval, and a lane marking that interval. A
+        violation seen during the flight is published again with the final verdicts: one
+        mark, with the interval the end knows."""
+        if not isinstance(data, dict) or data.get("status") != "violated":
+            return
+        name, start_s = data.get("property"), data.get("t_s")
+        if not isinstance(name, str) or not isinstance(start_s, (int, float)):
+            return
+        end_s = data.get("end_s", start_s)
+        end_s = end_s if isinstance(end_s, (int, float)) else start_s
+        start = round(start_s * 1e9) - self._origin
+        end = round(end_s * 1e9) - self._origin
+        entity = self._layout.property_state(name)
+        if name not in self._violations:
+            message = str(data.get("message", "") or "")
+            self._w.row(self._layout.errors, rr.TextLog, start, text=message, level=texts.ERROR)
+            self._w.row(entity, rr.StateChange, start, state="violated")
+        if end > self._violations.get(name, start):
+            # The interval ends a tick after its last violating sample.
+            self._w.row(entity, rr.StateChange, end + PROPERTY_TICK_NS, state="")
+        self._violations[name] = max(end, self._violations.get(name, start))
+
     # -- helpers -----------------------------------------------------------------------------
     def _text_row(self, entity: str, row: tuple[str, str], t: int) -> None:
         text, level = row
@@ -292,6 +320,7 @@ _TOPIC_HANDLERS: dict[str, Callable[[SessionConverter, Any, int], None]] = {
     "mission/command": SessionConverter._mission,
     "log": SessionConverter._log,
     "beliefs": SessionConverter._belief,
+    "properties": SessionConverter._property,
 }
 
 __all__ = [

@@ -6,7 +6,7 @@ the left sidebar; Foxglove: the top bar's layout menu): `aeroexec layout --foxgl
     | Flight (3D: world frame, vehicle | Position (m) and battery (plot of  |
     |   body on <drone>/base_link,     |   vehicle/state)                   |
     |   markers, object, grid)         |------------------------------------|
-    |                                  | Behavior events (state timeline)   |
+    |                                  | Behavior events and properties     |
     |                                  |------------------------------------|
     |----------------------------------| Capabilities (one state timeline  |
     | Call log (Log panel:  | Log      |   per capability: its references)  |
@@ -224,8 +224,14 @@ def panels(content: LayoutContent) -> dict[str, dict[str, Any]]:
         }
     if content.behaviors:
         out[f"{STATE_TRANSITIONS}!behavior-events"] = {
-            TITLE: "Behavior events",
-            "paths": [_path(f"{event}.name", "behavior"), _path(f"{event}.code", "event")],
+            TITLE: "Behavior events and properties",
+            "paths": [
+                _path(f"{event}.name", "behavior"),
+                _path(f"{event}.code", "event"),
+                # run/fly --spec: each violation (and the final verdicts) as published.
+                _path(f"{ns}/properties.property", "property"),
+                _path(f"{ns}/properties.status", "verdict"),
+            ],
             "isSynced": True,
             "showPoints": True,
         }

@@ -14,8 +14,11 @@ tests all take their paths from here, so the tree is described in one place:
     {root}/behaviors/state/<B>    StateChange: "#uid args" while active, reset when it ends
     {root}/capabilities/<C>       Scalars: reference count of capability C
     {root}/processes/<P>          StateChange: process P's state, reset when stopped
+    {root}/properties/<P>         StateChange: "violated" over property P's first violating
+                                  interval (run/fly --spec, docs/properties.md)
     {root}/events                 TextLog: one row per behavior_event
-    {root}/errors                 TextLog: rejected activations, failed calls, vehicle faults
+    {root}/errors                 TextLog: rejected activations, failed calls, vehicle faults,
+                                  violated properties
     {root}/calls                  TextLog: the service call tree, indented by depth
     {root}/mission                TextLog: mission/command (what the mission asked)
     {root}/log                    TextLog: the session's foxglove.Log messages
@@ -113,6 +116,13 @@ class Layout:
 
     def process(self, name: str) -> str:
         return self.path("processes", escape_entity_path_part(name))
+
+    @property
+    def properties(self) -> str:
+        return self.path("properties")
+
+    def property_state(self, name: str) -> str:
+        return self.path("properties", escape_entity_path_part(name))
 
     # -- text logs ---------------------------------------------------------------------
     @property

@@ -647,6 +647,15 @@ class MavlinkVehicle:
         self._set_mode(LAND)
         return "switched to LAND"
 
+    def return_home(self) -> str:
+        """RTL, unless the autopilot is already landing or returning; what was done."""
+        if self.descending:
+            return f"left it in {self.telemetry.mode}"
+        self._velocity_ned = None
+        self._require_link("return")
+        self._set_mode(RTL)
+        return "switched to RTL"
+
     def hold_here(self) -> str:
         """Brake and hold in GUIDED; in any other mode the autopilot keeps what it does."""
         if self.telemetry.custom_mode != GUIDED:

@@ -1,0 +1,160 @@
+"""Properties monitored while a session runs (`run --spec`, `fly --spec`).
+
+`PropertyMonitor` is a bus observer. It feeds the session's messages to the same
+`SignalBuilder` a recording's are fed to offline (`check.py`), and at the end evaluates
+the same properties with the same code: online and offline verdicts of one flight are
+identical by construction, and `tests/test_properties_online.py` checks they are.
+
+During the session it judges the properties that can act (those with an `action`) as
+soon as their verdict on a tick is final: the body of `always(body)` reads a bounded
+time around each tick (`Formula.window_ticks`), so at every check (each `check_every_s`
+of session time) it evaluates only the window of ticks that became final since the last
+one, with the history the body needs. On the first violation it publishes the verdict
+(the `properties` channel, and an ERROR line on `log`) and asks the executive to stop;
+the session ends the flight with the property's action (`aeroexec.mission.assurance`,
+or the live ending). Properties without an action are judged once, at the end, and
+their violations published then.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from aeroexec.executive.executive import Executive
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.properties.check import VIOLATED, Verdict, evaluate
+from aeroexec.properties.signals import PERIOD_NS, PERIOD_S, SignalBuilder
+from aeroexec.properties.spec import Property, PropertySet
+
+#: How often (session seconds) properties with an action are judged during a session.
+CHECK_EVERY_S = 0.5
+#: The topic (in the drone's namespace) verdicts are published on.
+TOPIC = "properties"
+
+
+class PropertyMonitor:
+    def __init__(self, properties: PropertySet, *, check_every_s: float = CHECK_EVERY_S) -> None:
+        self.properties = properties
+        self.builder = SignalBuilder(None)
+        self._every = max(1, round(check_every_s / PERIOD_S))
+        #: Acting properties, each with (past, future) ticks and the last judged tick.
+        self._acting: list[tuple[Property, int, int]] = []
+        self._judged: dict[str, int] = {}
+        for prop in properties.properties:
+            window = prop.formula.window_ticks()
+            if prop.action and window is not None:
+                self._acting.append((prop, *window))
+                self._judged[prop.name] = -1
+        self._next_check = 0
+        self._executive: Executive | None = None
+        #: Violations seen during the session: property name -> first violating tick.
+        self.early: dict[str, int] = {}
+        #: The final verdicts (after `session_ending`).
+        self.verdicts: list[Verdict] = []
+        #: The violated property whose action ended the session (None: none did).
+        self.stopped_by: Property | None = None
+        self.stopped_at_s: float | None = None
+
+    # -- the session ----------------------------------------------------------------------
+    def session_started(self, executive: Executive) -> None:
+        self._executive = executive
+        self.builder.use_catalog(executive.catalog.conflicts_of)
+
+    def session_ending(self, executive: Executive) -> None:
+        self.verdicts = evaluate(self.properties, self.builder.finish())
+        for verdict in self.verdicts:
+            if verdict.status == VIOLATED and verdict.name not in self.early:
+                self._publish(executive, verdict.property, verdict, None)
+        for verdict in self.verdicts:
+            executive.bus.publish(TOPIC, _final(verdict))
+
+    # -- BusObserver ----------------------------------------------------------------------
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        self.builder.call(record.service, record.log_time_ns, record.request, record.response)
+
+    def on_topic(self, record: TopicRecord) -> None:
+        topic = record.topic
+        if topic == TOPIC:
+            return
+        self.builder.topic(topic, record.log_time_ns, record.data)
+        if self._acting and topic == "vehicle/state":
+            tick = record.log_time_ns // PERIOD_NS
+            if tick >= self._next_check:
+                self._next_check = tick + self._every
+                self._judge(tick)
+
+    # -- internals ------------------------------------------------------------------------
+    def _judge(self, now: int) -> None:
+        if self.stopped_by is not None:
+            return
+        for prop, past, future in self._acting:
+            judged = self._judged[prop.name]
+            final = now - future
+            if final <= judged:
+                continue
+            start = max(0, judged + 1 - past)
+            columns = self.builder.window(start, prop.formula.signals)
+            self._judged[prop.name] = final
+            if columns is None:
+                continue  # judged at the end, where a missing signal is reported
+            body = prop.formula.body_verdicts(columns, now + 1 - start)
+            lo, hi = judged + 1 - start, final - start
+            bad = [i for i in range(lo, hi + 1) if body[i] < 0]
+            if not bad:
+                continue
+            tick = start + bad[0]
+            self.early[prop.name] = tick
+            self.stopped_by = prop
+            self.stopped_at_s = round(tick * PERIOD_S, 6)
+            executive = self._executive
+            if executive is not None:
+                self._publish(executive, prop, None, tick)
+                assert prop.action is not None
+                executive.request_stop(
+                    f"property {prop.name} violated at {tick * PERIOD_S:.2f} s "
+                    f"({prop.where}): {prop.action}",
+                    prop.action,
+                )
+            return
+
+    def _publish(
+        self, executive: Executive, prop: Property, verdict: Verdict | None, tick: int | None
+    ) -> None:
+        if verdict is not None and verdict.interval_s is not None:
+            start_s, end_s = verdict.interval_s
+        else:
+            start_s = end_s = round((tick or 0) * PERIOD_S, 6)
+        what = prop.description or prop.formula.text
+        action = f"; {prop.action}" if prop.action and verdict is None else ""
+        message = f"property {prop.name} violated at {start_s:.2f} s: {what}{action}"
+        data: dict[str, Any] = {
+            "property": prop.name,
+            "status": VIOLATED,
+            "severity": prop.severity,
+            "t_s": start_s,
+            "end_s": end_s,
+            "defined_at": prop.where,
+            "message": message,
+        }
+        if prop.action:
+            data["action"] = prop.action
+        executive.bus.publish(TOPIC, data)
+        level = {"error": "ERROR", "warning": "WARNING"}.get(prop.severity, "INFO")
+        executive.log(message, level, f"property:{prop.name}")
+
+
+def _final(verdict: Verdict) -> dict[str, Any]:
+    prop = verdict.property
+    data: dict[str, Any] = {
+        "property": prop.name,
+        "status": verdict.status,
+        "severity": prop.severity,
+        "defined_at": prop.where,
+        "message": verdict.message(),
+    }
+    if verdict.interval_s is not None:
+        data["t_s"], data["end_s"] = verdict.interval_s
+    if verdict.robustness is not None and math.isfinite(verdict.robustness):
+        data["robustness"] = verdict.robustness + 0.0
+    return data

@@ -1,0 +1,230 @@
+"""`aeroexec check`'s outputs: text, json, sarif, junit and github.
+
+The escaping rules of GitHub's workflow commands and the JUnit layout are the ones the
+verifier's and replay's reporters use; they are restated here (a few lines) because the
+tools do not import each other (docs/design.md#layers).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+from xml.etree import ElementTree as ET
+
+from aeroexec import __version__
+from aeroexec.properties.check import MISSING, VIOLATED, CheckReport, Verdict
+from aeroexec.properties.signals import FAMILIES, SIGNALS
+from aeroexec.properties.spec import Property
+
+_LEVEL = {"error": "error", "warning": "warning", "note": "note"}
+_GITHUB = {"error": "error", "warning": "warning", "note": "notice"}
+
+
+def _t(verdict: Verdict) -> str:
+    start = verdict.interval_s[0] if verdict.interval_s else 0.0
+    return f"t={start:.2f}s"
+
+
+def text(reports: Sequence[CheckReport], *, verbose: bool = False) -> str:
+    """`REC: t=12.40s: error PROPERTY: message (spec.yaml:LINE)`, one line per violation
+    (and per property not checked), then a summary."""
+    lines = []
+    for report in reports:
+        for verdict in report.verdicts:
+            prop = verdict.property
+            if verdict.status == VIOLATED:
+                lines.append(
+                    f"{report.recording}: {_t(verdict)}: {prop.severity} {prop.name}: "
+                    f"{verdict.message()} ({prop.where})"
+                )
+            elif verdict.status == MISSING:
+                lines.append(
+                    f"{report.recording}: note {prop.name}: {verdict.message()} ({prop.where})"
+                )
+            elif verbose:
+                lines.append(f"{report.recording}: ok {prop.name}: {verdict.message()}")
+    violated = sum(len(r.violated) for r in reports)
+    checked = sum(1 for r in reports for v in r.verdicts if v.status != MISSING)
+    lines.append(
+        f"{len(reports)} recording(s), {checked} check(s): "
+        + (f"{violated} violated" if violated else "all properties hold")
+    )
+    return "\n".join(lines) + "\n"
+
+
+def _number(value: float | None) -> float | None:
+    return None if value is None or not math.isfinite(value) else value + 0.0
+
+
+def verdict_json(verdict: Verdict) -> dict[str, Any]:
+    prop = verdict.property
+    out: dict[str, Any] = {
+        "property": prop.name,
+        "status": verdict.status,
+        "severity": prop.severity,
+        "robustness": _number(verdict.robustness),
+        "defined_at": prop.where,
+        "formula": prop.formula.text,
+    }
+    if verdict.interval_s is not None:
+        out["interval"] = {"start_s": verdict.interval_s[0], "end_s": verdict.interval_s[1]}
+    if verdict.missing:
+        out["missing"] = [{"signal": n, "why": why} for n, why in verdict.missing]
+    if prop.action:
+        out["action"] = prop.action
+    return out
+
+
+def as_json(reports: Sequence[CheckReport]) -> str:
+    body = {
+        "recordings": [
+            {
+                "recording": r.recording,
+                "duration_s": r.duration_s,
+                "verdicts": [verdict_json(v) for v in r.verdicts],
+            }
+            for r in reports
+        ],
+        "violated": sum(len(r.violated) for r in reports),
+    }
+    return json.dumps(body, indent=2) + "\n"
+
+
+def _escape(value: str) -> str:
+    return value.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+
+
+def _escape_property(value: str) -> str:
+    return _escape(value).replace(":", "%3A").replace(",", "%2C")
+
+
+def github(reports: Sequence[CheckReport]) -> str:
+    """One workflow annotation per violation, on the line that defines the property."""
+    lines = []
+    for report in reports:
+        for verdict in report.violated:
+            prop = verdict.property
+            props = [f"file={_escape_property(prop.mark.file)}"]
+            if prop.mark.line:
+                props.append(f"line={prop.mark.line}")
+            props.append(f"title={_escape_property(prop.name)}")
+            message = f"{report.recording}: {_t(verdict)}: {verdict.message()}"
+            lines.append(f"::{_GITHUB[prop.severity]} {','.join(props)}::{_escape(message)}")
+    return "".join(line + "\n" for line in lines)
+
+
+def sarif(reports: Sequence[CheckReport]) -> str:
+    rules: dict[str, Property] = {}
+    for report in reports:
+        for verdict in report.verdicts:
+            rules.setdefault(verdict.property.name, verdict.property)
+    results = []
+    for report in reports:
+        for verdict in report.violated:
+            prop = verdict.property
+            location: dict[str, Any] = {
+                "physicalLocation": {
+                    "artifactLocation": {"uri": Path(prop.mark.file).as_posix()},
+                    **({"region": {"startLine": prop.mark.line}} if prop.mark.line else {}),
+                },
+                "logicalLocations": [
+                    {"name": f"{report.recording}@{_t(verdict)}", "kind": "recording"}
+                ],
+            }
+            results.append(
+                {
+                    "ruleId": prop.name,
+                    "level": _LEVEL[prop.severity],
+                    "message": {"text": f"{report.recording}: {_t(verdict)}: {verdict.message()}"},
+                    "locations": [location],
+                    "properties": verdict_json(verdict),
+                }
+            )
+    log = {
+        "$schema": "https://json.schemastore.org/sarif-2.1.0.json",
+        "version": "2.1.0",
+        "runs": [
+            {
+                "tool": {
+                    "driver": {
+                        "name": "aeroexec check",
+                        "version": __version__,
+                        "rules": [
+                            {
+                                "id": p.name,
+                                "shortDescription": {"text": p.description or p.formula.text},
+                                "fullDescription": {"text": p.formula.text},
+                                "defaultConfiguration": {"level": _LEVEL[p.severity]},
+                            }
+                            for p in rules.values()
+                        ],
+                    }
+                },
+                "results": results,
+            }
+        ],
+    }
+    return json.dumps(log, indent=2) + "\n"
+
+
+def junit(reports: Sequence[CheckReport], timestamp: str | None = None) -> str:
+    """One test suite per recording, one test case per property: a violation is a
+    failure, a property whose signals the recording lacks is skipped."""
+    suites = ET.Element("testsuites", name="aeroexec check")
+    for report in reports:
+        suite = ET.SubElement(
+            suites,
+            "testsuite",
+            name=report.recording,
+            tests=str(len(report.verdicts)),
+            failures=str(len(report.violated)),
+            skipped=str(sum(1 for v in report.verdicts if v.status == MISSING)),
+        )
+        if timestamp:
+            suite.set("timestamp", timestamp)
+        for verdict in report.verdicts:
+            case = ET.SubElement(
+                suite, "testcase", classname=report.recording, name=verdict.property.name
+            )
+            if verdict.status == VIOLATED:
+                failure = ET.SubElement(
+                    case, "failure", message=f"{_t(verdict)}: {verdict.message()}"
+                )
+                failure.text = f"{verdict.property.formula.text}\n({verdict.property.where})"
+            elif verdict.status == MISSING:
+                ET.SubElement(case, "skipped", message=verdict.message())
+    ET.indent(suites)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, "unicode") + "\n"
+
+
+def explain(prop: Property) -> str:
+    """What `--explain PROPERTY` prints: the property and the signals it reads."""
+    lines = [
+        f"{prop.name} ({prop.where})",
+        f"  formula:  {prop.formula.text}",
+        f"  severity: {prop.severity}",
+    ]
+    if prop.description:
+        lines.append(f"  meaning:  {prop.description}")
+    if prop.action:
+        lines.append(f"  action:   {prop.action} (run/fly --spec end the flight so)")
+    horizon = prop.formula.horizon_s()
+    if horizon is not None:
+        lines.append(f"  a violation is final {horizon:g} s after it starts (online)")
+    lines.append("  signals:")
+    for name in prop.formula.signals:
+        lines.append(f"    {name}: {describe_signal(name)}")
+    return "\n".join(lines) + "\n"
+
+
+def describe_signal(name: str) -> str:
+    for doc in SIGNALS:
+        if doc.name == name:
+            return f"{doc.meaning} [{doc.unit}] from {doc.source}"
+    for prefix, (unit, meaning, source) in FAMILIES.items():
+        if name.startswith(prefix):
+            return f"{meaning.replace(' B ', ' ').replace(' C ', ' ')} [{unit}] from {source}"
+    return "unknown"

@@ -1,0 +1,489 @@
+"""The signals properties speak about, and how they are sampled from a session.
+
+One extraction serves a recording (offline, `signals_from_recording`) and a running
+session (online, the monitor feeds the bus's records): both call `SignalBuilder.topic` and
+`SignalBuilder.call` with the same (name, time, data), so both produce the same samples,
+and the same evaluation gives the same verdicts.
+
+Samples sit on the executive's tick grid (`PERIOD_NS`, 10 Hz): sample k holds the state
+after every message logged in [k, k+1) ticks (zero-order hold between changes). In
+simulation every message falls on a tick; a live flight's messages are assigned to the
+tick they fall in.
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+#: The executive's tick (aeroexec/executive/clock.py steps 0.1 s): one sample per tick.
+PERIOD_NS = 100_000_000
+PERIOD_S = PERIOD_NS / 1e9
+
+#: `fault_low_battery` is raised when the battery first falls below this charge (the
+#: simulator models a low battery as a level, not as a vehicle fault).
+LOW_BATTERY_LEVEL = 0.2
+
+#: Vehicle faults after which the vehicle cannot fly on: an empty battery forces a
+#: landing, a seized motor stops every motion (aeroexec/vehicles/sim.py).
+GROUNDING_FAULTS = ("battery_empty", "stuck_motor")
+
+
+@dataclass(frozen=True, slots=True)
+class SignalDoc:
+    name: str
+    unit: str
+    meaning: str
+    source: str
+
+
+#: The fixed-name signals (docs/properties.md renders this table; a test keeps it true).
+SIGNALS: tuple[SignalDoc, ...] = (
+    SignalDoc("altitude", "m", "height of the vehicle, up", "vehicle/state position z"),
+    SignalDoc("speed", "m/s", "magnitude of the velocity", "vehicle/state velocity"),
+    SignalDoc("battery", "0-1", "remaining charge", "vehicle/state battery"),
+    SignalDoc(
+        "distance_home",
+        "m",
+        "horizontal distance from the first recorded position",
+        "vehicle/state position",
+    ),
+    SignalDoc("flying", "0/1", "the vehicle is airborne", "vehicle/state flying"),
+    SignalDoc("armed", "0/1", "the motors are armed", "vehicle/state armed"),
+    SignalDoc("landed", "0/1", "not flying (1 - flying)", "vehicle/state flying"),
+    SignalDoc(
+        "link",
+        "0/1",
+        "the vehicle's link is up (0 while the fault is link_lost)",
+        "vehicle/state fault",
+    ),
+    SignalDoc(
+        "incompatible",
+        "0/1",
+        "two referenced capabilities are incompatible in the recorded catalog",
+        "list_of_active_capabilities + catalog",
+    ),
+    SignalDoc(
+        "unanswered",
+        "count",
+        "accepted activations of non-recurrent behaviors not yet ended by their event",
+        "activate_behavior, default_values, behavior_event",
+    ),
+    SignalDoc(
+        "grounded",
+        "0/1",
+        "a fault that makes flight impossible was seen "
+        f"({', '.join(GROUNDING_FAULTS)}), from then on",
+        "vehicle/state fault",
+    ),
+    SignalDoc("end", "0/1", "1 at the session's last sample", "the recording's last message"),
+)
+
+#: Per-name signals: prefix -> (unit, meaning, source).
+FAMILIES: dict[str, tuple[str, str, str]] = {
+    "active_": ("0/1", "behavior B is active", "list_of_active_behaviors"),
+    "capability_": (
+        "0/1",
+        "capability C is referenced (reference count > 0)",
+        "list_of_active_capabilities",
+    ),
+    "fault_": (
+        "0/1",
+        "fault K was seen, from that moment on (K: stuck_motor, battery_empty, link_lost, "
+        f"mode_changed, not_connected; low_battery when the charge falls below "
+        f"{LOW_BATTERY_LEVEL:g})",
+        "vehicle/state fault, battery",
+    ),
+    "command_": (
+        "0/1",
+        "1 at the sample a mission command for behavior B is issued",
+        "mission/command",
+    ),
+}
+
+#: Which recorded channel each fixed signal needs (a recording without it lacks them).
+_VEHICLE = frozenset(
+    {"altitude", "speed", "battery", "distance_home", "flying", "armed", "landed", "link"}
+)
+
+
+#: The vehicle/state fields each vehicle signal is made from.
+_FIELDS_OF: dict[str, tuple[str, ...]] = {
+    "altitude": ("position",),
+    "distance_home": ("position",),
+    "speed": ("velocity",),
+    "battery": ("battery",),
+    "flying": ("flying",),
+    "landed": ("flying",),
+    "armed": ("armed",),
+    "link": ("fault",),
+    "grounded": ("fault",),
+}
+
+#: The vehicle signals made from the state rows (link and grounded are changes).
+_ROW_SIGNALS = ("altitude", "speed", "battery", "flying", "landed", "armed", "distance_home")
+
+
+def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np.ndarray:
+    """`name` from state rows (sample, x, y, z, speed, battery, flying, armed)."""
+    if name == "distance_home":
+        return np.hypot(held[:, 1] - float(first[1]), held[:, 2] - float(first[2]))
+    if name == "landed":
+        return 1.0 - held[:, 6]
+    return held[:, {"altitude": 3, "speed": 4, "battery": 5, "flying": 6, "armed": 7}[name]]
+
+
+def _numeric(row: tuple[Any, ...]) -> bool:
+    return all(isinstance(v, (int, float)) for v in row)
+
+
+def is_known_signal(name: str) -> bool:
+    return any(name == s.name for s in SIGNALS) or any(
+        name.startswith(prefix) and len(name) > len(prefix) for prefix in FAMILIES
+    )
+
+
+@dataclass(frozen=True)
+class Signals:
+    """Sampled signals: `values[name][k]` at time `k * PERIOD_S`; `missing[name]` says why
+    a signal the session could not give is absent."""
+
+    length: int
+    values: Mapping[str, np.ndarray]
+    #: Channels the session had (decides which per-name signals exist, as zeros).
+    sources: frozenset[str]
+    #: vehicle/state fields the recording had only as an importer's defaults.
+    defaulted: frozenset[str] = frozenset()
+
+    def times(self) -> list[float]:
+        return [k * PERIOD_S for k in range(self.length)]
+
+    def get(self, name: str) -> np.ndarray | None:
+        """The samples of `name`, or None when the session could not give it."""
+        found = self.values.get(name)
+        if found is not None:
+            return found
+        if name.startswith("fault_") and "fault" in self.defaulted:
+            return None
+        for prefix, needs in _FAMILY_SOURCES.items():
+            if name.startswith(prefix) and needs in self.sources:
+                return np.zeros(self.length)  # never active, never seen, never issued
+        return None
+
+    def why_missing(self, name: str) -> str:
+        fields = _FIELDS_OF.get(name, ("fault",) if name.startswith("fault_") else ())
+        guessed = [f for f in fields if f in self.defaulted]
+        if guessed:
+            return f"the recording's vehicle states lack {guessed[0]} (an import's default)"
+        need = _SOURCE_OF.get(name)
+        if need is None:
+            for prefix, source in _FAMILY_SOURCES.items():
+                if name.startswith(prefix):
+                    need = source
+        if name == "incompatible" and "list_of_active_capabilities" in self.sources:
+            return "the recording carries no catalog (catalog.yaml attachment)"
+        return f"the recording has no {need} messages" if need else "unknown signal"
+
+
+_FAMILY_SOURCES = {
+    "active_": "list_of_active_behaviors",
+    "capability_": "list_of_active_capabilities",
+    "fault_": "vehicle/state",
+    "command_": "mission/command",
+}
+_SOURCE_OF = {name: "vehicle/state" for name in _VEHICLE} | {
+    "incompatible": "list_of_active_capabilities",
+    "unanswered": "activate_behavior",
+    "grounded": "vehicle/state",
+    "end": "any",
+}
+
+
+class SignalBuilder:
+    """Turns a session's messages, in order, into `Signals`.
+
+    `conflicts(capability)`: the capabilities incompatible with it (from the catalog);
+    None when the session has no catalog (then `incompatible` is missing)."""
+
+    def __init__(self, conflicts: Callable[[str], Iterable[str]] | None = None) -> None:
+        self._conflicts = conflicts
+        #: name -> list of (sample, value) changes; the value holds until the next one.
+        self._changes: dict[str, list[tuple[int, float]]] = {}
+        self._current: dict[str, float] = {}
+        self._pulses: dict[str, list[int]] = {}
+        self._sources: set[str] = set()
+        self._last = -1
+        self._home: tuple[float, float] | None = None
+        self._active: frozenset[str] = frozenset()
+        self._capabilities: frozenset[str] = frozenset()
+        self._recurrent: dict[str, bool] = {}
+        self._pending: dict[int, str] = {}
+        self._answered: set[int] = set()
+        #: (sample, x, y, z, speed, battery, flying, armed) per vehicle state.
+        self._rows: list[tuple[int, float, float, float, float, float, float, float]] = []
+        self._last_fault: Any = None
+        #: vehicle/state fields some state had only as an importer's default.
+        self._defaulted: set[str] = set()
+        self._faults: set[str] = set()
+
+    # -- input ------------------------------------------------------------------------------
+    def use_catalog(self, conflicts: Callable[[str], Iterable[str]]) -> None:
+        """The catalog's capability conflicts, when they become known (a recording's
+        attachment, before its messages; a session's catalog, after the executive's first
+        messages: the capabilities held so far are judged at once)."""
+        self._conflicts = conflicts
+        if "list_of_active_capabilities" in self._sources:
+            self._set(max(self._last, 0), "incompatible", float(self._any_conflict()))
+
+    def mark_time(self, t_ns: int) -> None:
+        """A message no signal reads: it still extends the session."""
+        k = t_ns // PERIOD_NS
+        if k > self._last:
+            self._last = k
+
+    def topic(self, name: str, t_ns: int, data: Any) -> None:
+        k = t_ns // PERIOD_NS
+        if k > self._last:
+            self._last = k
+        if not isinstance(data, dict):
+            return
+        if name == "vehicle/state":
+            if not self._rows:
+                self._sources.add(name)
+            self._vehicle(k, data)
+        elif name == "list_of_active_behaviors":
+            self._sources.add(name)
+            self._set_members(k, "active_", self._active, data.get("behaviors"), "_active")
+        elif name == "list_of_active_capabilities":
+            self._sources.add(name)
+            names = [
+                c.get("name")
+                for c in data.get("capabilities") or ()
+                if isinstance(c, dict) and (c.get("references") or 0) > 0
+            ]
+            self._set_members(k, "capability_", self._capabilities, names, "_capabilities")
+            if self._conflicts is not None:
+                self._set(k, "incompatible", float(self._any_conflict()))
+        elif name == "mission/command":
+            self._sources.add(name)
+            behavior = data.get("behavior")
+            if isinstance(behavior, str) and behavior:
+                pulses = self._pulses.setdefault("command_" + behavior, [])
+                if not pulses or pulses[-1] != k:
+                    pulses.append(k)
+        elif name == "behavior_event":
+            uid = data.get("uid")
+            if isinstance(uid, int):
+                # An event can come before its activation's call record: a call is
+                # recorded when it completes, and a start that fails at once answers
+                # inside it.
+                self._answered.add(uid)
+                if self._pending.pop(uid, None) is not None:
+                    self._set(k, "unanswered", float(len(self._pending)))
+
+    def call(self, service: str, t_ns: int, request: Any, response: Any) -> None:
+        k = t_ns // PERIOD_NS
+        if k > self._last:
+            self._last = k
+        if not isinstance(response, dict) or not isinstance(request, dict):
+            return
+        if service == "default_values":
+            behavior = request.get("behavior")
+            if isinstance(behavior, str):
+                self._recurrent[behavior] = bool(response.get("recurrent"))
+        elif service == "activate_behavior":
+            self._sources.add(service)
+            behavior = request.get("behavior")
+            uid = response.get("uid")
+            if (
+                response.get("ok")
+                and isinstance(uid, int)
+                and isinstance(behavior, str)
+                and not self._recurrent.get(behavior, False)
+                and uid not in self._answered
+            ):
+                self._pending[uid] = behavior
+            self._set(k, "unanswered", float(len(self._pending)))
+
+    # -- output -----------------------------------------------------------------------------
+    @property
+    def last_sample(self) -> int:
+        """The last sample so far (-1 before any message)."""
+        return self._last
+
+    def finish(self, start: int = 0, *, final: bool = True) -> Signals:
+        """The samples from `start` to the last one. `final`: the session has ended (the
+        `end` signal is 1 on its last sample; a window of a running session has no end)."""
+        length = self._last + 1 - start if self._last >= start else 0
+        values: dict[str, np.ndarray] = {}
+        samples = np.arange(start, start + length)
+        for name, changes in self._changes.items():
+            at = np.array([k for k, _ in changes])
+            column = np.array([v for _, v in changes])
+            # A count or a 0/1 flag is 0 until its first change.
+            index = np.searchsorted(at, samples, side="right") - 1
+            values[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
+        if self._rows and length:
+            # The last state of each tick counts; before the first, the first (a vehicle
+            # signal is known from the session's start).
+            first_row = bisect_right(self._rows, (start, math.inf)) - 1
+            rows = self._row_array(max(first_row, 0))
+            index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
+            held = rows[index]
+            for name in _ROW_SIGNALS:
+                if not self._guessed(name):
+                    values[name] = _vehicle_column(name, held, self._rows[0])
+            first_k = int(self._rows[0][0])
+            for name in ("link", "grounded"):
+                if name in values and first_k >= start:
+                    # Known from the first state: its value holds before it too.
+                    values[name][: first_k - start] = values[name][first_k - start]
+        for name, pulses in self._pulses.items():
+            column = np.zeros(length)
+            inside = [k - start for k in pulses if k >= start]
+            column[inside] = 1.0
+            values[name] = column
+        if length:
+            end = np.zeros(length)
+            if final:
+                end[-1] = 1.0
+            values["end"] = end
+        for name in list(values):
+            if self._guessed(name):
+                del values[name]
+        return Signals(length, values, frozenset(self._sources), frozenset(self._defaulted))
+
+    def _guessed(self, name: str) -> bool:
+        """Whether `name` comes from a field the recording only had as a default."""
+        fields = _FIELDS_OF.get(name, ("fault",) if name.startswith("fault_") else ())
+        return any(f in self._defaulted for f in fields)
+
+    def window(self, start: int, names: Iterable[str]) -> dict[str, np.ndarray] | None:
+        """The samples from `start` to the last one of the signals `names`, as
+        `finish(start, final=False)` gives them, built from only what that window needs
+        (an online check looks at a few ticks); None when one of them is missing."""
+        length = self._last + 1 - start
+        if length <= 0:
+            return None
+        samples = np.arange(start, start + length)
+        out: dict[str, np.ndarray] = {}
+        rows: np.ndarray | None = None
+        for name in names:
+            changes = self._changes.get(name)
+            if self._guessed(name):
+                return None
+            if name in _ROW_SIGNALS:
+                if not self._rows:
+                    return None
+                if rows is None:
+                    first = max(bisect_right(self._rows, (start, math.inf)) - 1, 0)
+                    part = self._row_array(first)
+                    at = np.searchsorted(part[:, 0], samples, side="right") - 1
+                    rows = part[np.maximum(at, 0)]
+                out[name] = _vehicle_column(name, rows, self._rows[0])
+            elif changes is not None:
+                first = max(bisect_right(changes, (start, math.inf)) - 1, 0)
+                part = changes[first:]
+                at = np.array([k for k, _ in part])
+                column = np.array([v for _, v in part])
+                index = np.searchsorted(at, samples, side="right") - 1
+                out[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
+                first_k = int(self._rows[0][0]) if self._rows else -1
+                if name in ("link", "grounded") and start <= first_k < self._last + 1:
+                    # Known from the first state: its value holds before it too.
+                    out[name][: first_k - start] = out[name][first_k - start]
+            elif name in self._pulses:
+                pulses = self._pulses[name]
+                column = np.zeros(length)
+                column[[k - start for k in pulses[bisect_right(pulses, start - 1) :]]] = 1.0
+                out[name] = column
+            elif name == "end" or any(
+                name.startswith(prefix) and source in self._sources
+                for prefix, source in _FAMILY_SOURCES.items()
+            ):
+                out[name] = np.zeros(length)
+            else:
+                return None
+        return out
+
+    # -- internals --------------------------------------------------------------------------
+    def _set(self, k: int, name: str, value: float) -> None:
+        if self._current.get(name) == value:
+            return
+        self._current[name] = value
+        changes = self._changes.setdefault(name, [])
+        if changes and changes[-1][0] == k:
+            changes[-1] = (k, value)  # the state at the end of the tick counts
+        else:
+            changes.append((k, value))
+
+    def _set_members(
+        self, k: int, prefix: str, before: frozenset[str], names: Any, attr: str
+    ) -> None:
+        now = frozenset(n for n in names or () if isinstance(n, str))
+        for name in before - now:
+            self._set(k, prefix + name, 0.0)
+        for name in now - before:
+            self._set(k, prefix + name, 1.0)
+        setattr(self, attr, now)
+
+    def _any_conflict(self) -> bool:
+        assert self._conflicts is not None
+        held = self._capabilities
+        return any(other in held for name in held for other in self._conflicts(name))
+
+    def _vehicle(self, k: int, data: dict[str, Any]) -> None:
+        """One row per state (the hot path online: a state per tick); the columns are
+        made, and the values checked, at the end. Faults, rare, are changes."""
+        try:
+            position = data["position"]
+            velocity = data["velocity"]
+            battery = data["battery"]
+            row = (
+                k,
+                position[0],
+                position[1],
+                position[2],
+                velocity[0] * velocity[0] + velocity[1] * velocity[1] + velocity[2] * velocity[2],
+                battery,
+                data["flying"],
+                data.get("armed", False),
+            )
+            low = battery < LOW_BATTERY_LEVEL
+        except (KeyError, IndexError, TypeError):
+            return  # a malformed state is no sample
+        self._rows.append(row)
+        defaulted = data.get("defaulted")
+        if defaulted:  # a bag's import filled these in: not the vehicle's word
+            self._defaulted.update(d for d in defaulted if isinstance(d, str))
+        if low and "low_battery" not in self._faults:
+            self._fault(k, "low_battery")
+        fault = data.get("fault") or ""
+        if fault != self._last_fault:
+            self._last_fault = fault
+            kind = fault.split(":", 1)[0] if isinstance(fault, str) else ""
+            self._set(k, "link", 0.0 if kind == "link_lost" else 1.0)
+            if kind:
+                self._fault(k, kind)
+            self._set(k, "grounded", float(bool(self._faults & set(GROUNDING_FAULTS))))
+
+    def _row_array(self, first: int = 0) -> np.ndarray:
+        """The state rows from index `first` as floats (speed from its square); a row with
+        a value that is no number is dropped."""
+        rows = self._rows[first:]
+        try:
+            table = np.array(rows, dtype=float)
+        except (TypeError, ValueError):
+            table = np.array([r for r in rows if _numeric(r)], dtype=float).reshape(-1, 8)
+        table[:, 4] = np.sqrt(table[:, 4])
+        return table
+
+    def _fault(self, k: int, kind: str) -> None:
+        if kind not in self._faults:
+            self._faults.add(kind)
+            self._set(k, "fault_" + kind, 1.0)

@@ -1,0 +1,191 @@
+"""Properties (issue 25, docs/properties.md): offline cost, online cost, and agreement.
+
+(a) Offline: 20 properties (the four of aeroexec:safety and 16 more over every kind of
+    signal and operator, bounded windows up to 60 s included) on the recording of a
+    one-hour patrol (benchmarks/replay.py's patrol-60: 65 laps of four waypoints and a
+    40 s hover; about 36,000 ticks). The figure: extracting the signals and evaluating
+    the 20 properties (`check_recording`). The baseline, the floor: reading the channels
+    those properties need — the reader's pass over the file and a JSON decode of the
+    messages on those channels, nothing else. Target: <= 2x.
+(b) Online: the 10-minute patrol (patrol-10) simulated with `run --spec`'s monitor,
+    against the same run without a monitor, both unrecorded (the strictest baseline: a
+    recorded run costs more, and the line after the figures says what share of it the
+    monitor is). Two figures: the 18 properties without an action (fed every message,
+    judged at the end), and all 20, two with an action (judged every 0.5 s of session
+    time, never violated). Target: the monitor's extra CPU <= 10 % of the run, 1.1x.
+(c) Identical: the monitor's verdicts against `check` on the recording of the same run
+    (status, robustness, first violating interval of every property). Target: identical.
+
+Medians of --repeat interleaved rounds of CPU time (benchmarks/figures.py).
+
+    .venv/bin/python benchmarks/properties.py [--repeat 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import sys
+import tempfile
+from pathlib import Path
+
+import orjson
+from figures import Figure, interleaved, timed
+from replay import MISSION, PATROLS, long_endurance_world, record_patrol
+
+from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.properties.check import SERVICES, TOPICS, check_recording
+from aeroexec.properties.monitor import PropertyMonitor
+from aeroexec.properties.spec import PropertySet, load_properties, parse_properties
+from aeroexec.recording import open_recording
+
+FORMULAS = [
+    ("ceiling", "always(altitude <= 120)", None),
+    ("speed_limit", "always(speed <= 15)", None),
+    ("battery_floor", "always(battery >= 0.05)", "land"),
+    ("geofence", "always(distance_home <= 50)", "land"),
+    (
+        "low_battery_lands",
+        "always((fault_low_battery >= 1) implies eventually[0:30](landed >= 1))",
+        None,
+    ),
+    ("land_lands", "always((command_LAND >= 1) implies eventually[0:20](landed >= 1))", None),
+    ("moves_flying", "always((active_GO_TO_POINT >= 1) implies (flying >= 1))", None),
+    (
+        "took_off_first",
+        "always((active_GO_TO_POINT >= 1) implies once(active_TAKE_OFF >= 1))",
+        None,
+    ),
+    ("lands_at_last", "eventually(active_LAND >= 1)", None),
+    ("flying_armed", "always((flying >= 1) implies (armed >= 1))", None),
+    (
+        "go_to_ends",
+        "always((command_GO_TO_POINT >= 1) implies eventually[0:60](active_GO_TO_POINT <= 0))",
+        None,
+    ),
+    ("high_is_flying", "always(historically[0:5](altitude >= 1.4) implies (flying >= 1))", None),
+    ("hover_still", "always((active_KEEP_HOVERING >= 1) implies (speed <= 0.5))", None),
+    ("landed_low", "always((landed >= 1) implies (altitude <= 0.2))", None),
+    ("no_go_to_landing", "always(not((active_GO_TO_POINT >= 1) and (active_LAND >= 1)))", None),
+    ("disarmed_down", "always((armed <= 0) implies (flying <= 0))", None),
+]
+
+
+def twenty() -> PropertySet:
+    lines = ["properties:"]
+    for name, formula, action in FORMULAS:
+        lines += [f"  - name: {name}", f"    formula: '{formula}'", "    severity: warning"]
+        if action:
+            lines.append(f"    action: {action}")
+    own = parse_properties("\n".join(lines) + "\n", "bench.yaml")
+    safety = load_properties(["aeroexec:safety"]).properties
+    return PropertySet((*safety, *own), ("aeroexec:safety", "bench.yaml"))
+
+
+def read_channels(path: Path) -> None:
+    """The floor: what any checker must do to get at the values."""
+    for message in open_recording(path).messages():
+        parts = message.channel.topic.split("/", 2)
+        name = parts[2] if len(parts) == 3 else message.channel.topic
+        if name in TOPICS or name in SERVICES:
+            orjson.loads(message.data)
+
+
+def run_patrol(
+    mission: Path, world: Path, monitor: PropertyMonitor | None, record: Path | None = None
+) -> None:
+    with contextlib.redirect_stdout(io.StringIO()):
+        simulate(
+            SessionConfig(mission=mission, world=world, record=record),
+            observers=[monitor] if monitor is not None else [],
+        )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    props = twenty()
+    assert len(props.properties) == 20
+    figures = []
+    with tempfile.TemporaryDirectory(prefix="aeroexec-properties-bench-") as tmp:
+        directory = Path(tmp)
+        world = long_endurance_world(directory)
+        hour = record_patrol(directory, "patrol-60", world)
+        offline = interleaved(
+            {
+                "read": timed(lambda: read_channels(hour)),
+                "check": timed(lambda: check_recording(hour, props)),
+            },
+            args.repeat,
+        )
+        figures.append(
+            Figure(
+                "20 properties, 1-hour patrol (signals + evaluation)",
+                offline["check"],
+                offline["read"],
+                "reading their channels",
+                2.0,
+            )
+        )
+        laps, hover = PATROLS["patrol-10"]
+        mission = directory / "patrol-10.py"
+        mission.write_text(MISSION.format(laps=laps, hover=hover), encoding="utf-8")
+        passive = PropertySet(tuple(p for p in props.properties if not p.action), ())
+        recorded = directory / "recorded.mcap"
+        online = interleaved(
+            {
+                "plain": timed(lambda: run_patrol(mission, world, None)),
+                "recorded": timed(lambda: run_patrol(mission, world, None, recorded)),
+                "passive": timed(lambda: run_patrol(mission, world, PropertyMonitor(passive))),
+                "acting": timed(lambda: run_patrol(mission, world, PropertyMonitor(props))),
+            },
+            args.repeat,
+        )
+        figures.append(
+            Figure(
+                "10-min patrol, 18 properties monitored (judged at the end)",
+                online["passive"],
+                online["plain"],
+                "unmonitored, unrecorded",
+                1.1,
+            )
+        )
+        figures.append(
+            Figure(
+                "10-min patrol, 20 monitored, 2 with actions (judged every 0.5 s)",
+                online["acting"],
+                online["plain"],
+                "unmonitored, unrecorded",
+                1.1,
+            )
+        )
+        extra = online["passive"] - online["plain"]
+        print(
+            f"(monitoring without actions adds {extra * 1000:.1f} ms; a recorded run, as "
+            f"`aeroexec run -o` makes, takes {online['recorded'] * 1000:.1f} ms: "
+            f"{extra / online['recorded'] * 100:.0f} % of it)"
+        )
+        monitor = PropertyMonitor(props)
+        recording = directory / "monitored.mcap"
+        with contextlib.redirect_stdout(io.StringIO()):
+            simulate(SessionConfig(mission=mission, world=world, record=recording), [monitor])
+        key = [(v.name, v.status, v.robustness, v.interval_s) for v in monitor.verdicts]
+        again = check_recording(recording, props).verdicts
+        same = key == [(v.name, v.status, v.robustness, v.interval_s) for v in again]
+    ok = True
+    for figure in figures:
+        print(figure.line())
+        ok &= figure.ok
+    print(
+        f"online vs offline verdicts of one flight: {'identical' if same else 'DIFFERENT'} "
+        f"({len(key)} properties) | target identical {'ok' if same else 'MISSED'}"
+    )
+    ok &= same
+    print("all targets met" if ok else "some targets MISSED")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,232 @@
+"""Properties monitored online (`run --spec`): the same verdicts as `check` on the
+recording of the same flight, and actions that end the flight the way they say."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+from pathlib import Path
+
+import pytest
+
+from aeroexec.mission.script import Ending
+from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.properties.check import VIOLATED, check_recording
+from aeroexec.properties.monitor import PropertyMonitor
+from aeroexec.properties.spec import load_properties
+from aeroexec.recording import open_recording
+
+ROOT = Path(__file__).resolve().parent.parent
+APPENDIX_C = ROOT / "missions" / "appendix_c.py"
+FAULTS_WORLD = ROOT / "aeroexec" / "data" / "worlds" / "faults.yaml"
+SPEC = """\
+properties:
+  - name: ceiling
+    formula: always(altitude <= 1.4)
+  - name: lands_soon
+    formula: always((command_LAND >= 1) implies eventually[0:2](landed >= 1))
+  - name: took_off_first
+    formula: always((active_GO_TO_POINT >= 1) implies once(active_TAKE_OFF >= 1))
+  - name: markers_with_odometry
+    formula: always((active_PAY_ATTENTION_TO_VISUAL_MARKERS >= 1) implies
+      (capability_SELF_LOCALIZATION_BY_ODOMETRY >= 1))
+  - name: eventually_far
+    formula: eventually(distance_home >= 6)
+"""
+FENCE = """\
+properties:
+  - name: geofence
+    description: stay within 4 m of home
+    formula: always(distance_home <= 4)
+    action: {action}
+"""
+
+
+def _run(tmp: Path, name: str, specs: list[str], world: Path | None = None):
+    monitor = PropertyMonitor(load_properties(specs))
+    out = tmp / f"{name}.mcap"
+    with contextlib.redirect_stdout(io.StringIO()):
+        result = simulate(
+            SessionConfig(mission=APPENDIX_C, world=world, record=out), observers=[monitor]
+        )
+    return monitor, result, out
+
+
+def _same(verdicts_a, verdicts_b) -> None:
+    a = [(v.name, v.status, v.robustness, v.interval_s, v.missing) for v in verdicts_a]
+    b = [(v.name, v.status, v.robustness, v.interval_s, v.missing) for v in verdicts_b]
+    assert a == b
+
+
+@pytest.mark.parametrize("world", [None, FAULTS_WORLD], ids=["default", "faults"])
+def test_online_and_offline_verdicts_of_one_flight_are_identical(tmp_path, world) -> None:
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(SPEC, encoding="utf-8")
+    specs = ["aeroexec:safety", str(spec)]
+    monitor, _, recording = _run(tmp_path, "flight", specs, world)
+    offline = check_recording(recording, load_properties(specs)).verdicts
+    _same(monitor.verdicts, offline)
+    # Not trivially: both kinds of verdict are there.
+    assert {v.status for v in offline} >= {"held", VIOLATED}
+
+
+def test_a_geofence_with_land_ends_the_flight_at_the_fence(tmp_path) -> None:
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(FENCE.format(action="land"), encoding="utf-8")
+    monitor, result, recording = _run(tmp_path, "fenced", [str(spec), "aeroexec:safety"])
+    # Appendix C crosses 4 m from home at 6.5 s on its way to (3, 5.5).
+    assert monitor.stopped_at_s == pytest.approx(6.5)
+    assert result.outcome.ending is Ending.STOPPED
+    assert result.assurance[-1] == "landing"
+    assert not result.final_state.flying and not result.final_state.armed
+    x, y, _ = result.final_state.position
+    assert 4.0 < (x * x + y * y) ** 0.5 < 4.6  # it landed where it was, just past the fence
+    rec = open_recording(recording)
+    end = rec.metadata["aeroexec_end"]
+    assert end["reason"] == "property"
+    assert "geofence violated at 6.50 s" in end["detail"]
+    published = [r for r in rec.records() if getattr(r, "name", "") == "properties"]
+    early = published[0]
+    assert early.data["status"] == VIOLATED and early.data["t_s"] == 6.5
+    assert early.data["action"] == "land"
+    assert early.log_time_ns <= 7_000_000_000  # seen within the check period
+    logs = [r.data for r in rec.records() if getattr(r, "name", "") == "log"]
+    assert any(d["level"] == 4 and d["name"] == "property:geofence" for d in logs)
+    # After the landing, the safety set holds on the recording, offline as online.
+    offline = check_recording(recording, load_properties([str(spec), "aeroexec:safety"]))
+    _same(monitor.verdicts, offline.verdicts)
+    assert [v.name for v in offline.violated] == ["geofence"]
+
+
+def test_rtl_returns_home_and_lands_hold_keeps_flying_abort_stops(tmp_path) -> None:
+    ends = {}
+    for action in ("rtl", "hold", "abort"):
+        spec = tmp_path / f"{action}.yaml"
+        spec.write_text(FENCE.format(action=action), encoding="utf-8")
+        _, result, _ = _run(tmp_path, action, [str(spec)])
+        ends[action] = result
+    home = ends["rtl"].final_state
+    assert not home.flying
+    assert (home.position[0] ** 2 + home.position[1] ** 2) ** 0.5 < 0.3
+    assert ends["hold"].final_state.flying and ends["hold"].assurance[-1] == "holding"
+    assert ends["abort"].final_state.flying
+    assert ends["abort"].duration_s < ends["hold"].duration_s
+
+
+def test_an_action_needs_a_property_that_can_be_judged_during_the_flight() -> None:
+    from aeroexec.errors import PropertyError
+    from aeroexec.properties.spec import parse_properties
+
+    with pytest.raises(PropertyError) as caught:
+        parse_properties(
+            "properties:\n  - name: a\n    formula: eventually(landed >= 1)\n    action: land\n",
+            "a.yaml",
+        )
+    assert str(caught.value.mark) == "a.yaml:4:13"
+
+
+def test_a_window_is_what_the_whole_gives_for_those_ticks(tmp_path) -> None:
+    # The online check's windows against the offline extraction, on a real flight.
+    from aeroexec.properties.check import SERVICES, TOPICS, _inside
+    from aeroexec.properties.signals import SIGNALS, SignalBuilder
+
+    _, _, recording = _run(tmp_path, "flight", ["aeroexec:safety"])
+    builder = SignalBuilder(None)
+    for record in open_recording(recording).records():
+        name = getattr(record, "name", None)
+        if name is None and record.service in SERVICES:
+            builder.call(record.service, record.log_time_ns, record.request, record.response)
+        elif name in TOPICS:
+            builder.topic(name, record.log_time_ns, record.data)
+    names = [s.name for s in SIGNALS if s.name not in ("incompatible", "end")] + [
+        "active_GO_TO_POINT",
+        "capability_SELF_LOCALIZATION_BY_ODOMETRY",
+        "command_LAND",
+        "fault_stuck_motor",
+    ]
+    for start in (0, 1, 23, 40, 93, builder.last_sample):
+        whole = builder.finish(start, final=False)
+        window = builder.window(start, names)
+        assert window is not None
+        for name in names:
+            assert window[name].tolist() == whole.get(name).tolist(), (start, name)
+    assert _inside("/drone1/vehicle/state") == "vehicle/state"
+
+
+# -- fly --spec, against MavSim (the SITL flight is in test_sitl_flights.py) ----------------
+FAR = (
+    "    api.executeBehavior('TAKE_OFF')\n"
+    "    api.executeBehavior('GO_TO_POINT', coordinates=[0, 12, 1])\n"
+    "    api.executeBehavior('LAND')\n"
+)
+
+
+def test_fly_spec_lands_at_the_geofence_and_the_verdicts_match_check(tmp_path) -> None:
+    from live_helpers import free_udp_port, mavsim_thread, write_mission
+
+    from aeroexec.mission.live import FlightConfig, fly
+
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(FENCE.format(action="land"), encoding="utf-8")
+    props = load_properties([str(spec), "aeroexec:safety"])
+    monitor = PropertyMonitor(props, check_every_s=0.1)  # as fly --spec judges: every tick
+    port = free_udp_port()
+    out = tmp_path / "flight.mcap"
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", speed_factor=2.0) as sim:
+        result = fly(
+            FlightConfig(
+                mission=write_mission(tmp_path, FAR),
+                connect=f"udpin:127.0.0.1:{port}",
+                record=out,
+            ),
+            observers=[monitor],
+        )
+        final = sim.stats()["final"]
+    assert result.outcome.ending is Ending.STOPPED
+    assert monitor.stopped_by is not None and monitor.stopped_by.name == "geofence"
+    assert result.ending is not None and result.ending.down
+    assert "switched to LAND" in result.ending.actions
+    assert final["mode"] == "LAND" and not final["armed"]
+    # It landed at the fence, not at the mission's target 12 m away.
+    assert 4.0 < math.hypot(*final["position"][:2]) < 6.0
+    published = [
+        r.data for r in open_recording(out).records() if getattr(r, "name", "") == "properties"
+    ]
+    assert published[0]["property"] == "geofence" and published[0]["action"] == "land"
+    assert published[0]["t_s"] == monitor.stopped_at_s
+    offline = check_recording(out, props)
+    _same(monitor.verdicts, offline.verdicts)
+    assert [v.name for v in offline.violated] == ["geofence"]
+
+
+# -- the viewers ---------------------------------------------------------------------------
+def test_violations_show_in_rerun_as_an_error_and_a_lane(tmp_path) -> None:
+    from test_view import read_rrd
+
+    from aeroexec.viz import write_view
+
+    spec = tmp_path / "fence.yaml"
+    spec.write_text(FENCE.format(action="land"), encoding="utf-8")
+    _, _, recording = _run(tmp_path, "fenced", [str(spec)])
+    target = tmp_path / "fenced.rrd"
+    write_view([recording], target)
+    rrd = read_rrd(target)
+    lane = "/properties/geofence"
+    # Violated from 6.5 s (seen during the flight) to the end of the landing at 10.0 s.
+    assert rrd.values(lane, "StateChange:state") == ["violated", ""]
+    assert rrd.times(lane) == [6_500_000_000, 10_100_000_000]
+    errors = list(zip(rrd.times("/errors"), rrd.values("/errors", "TextLog:text"), strict=True))
+    assert (
+        6_500_000_000,
+        "property geofence violated at 6.50 s: stay within 4 m of home; land",
+    ) in errors
+
+
+def test_the_foxglove_layout_shows_properties_beside_behavior_events() -> None:
+    from aeroexec.viz.foxglove_layout import foxglove_layout
+
+    panel = foxglove_layout()["configById"]["StateTransitions!behavior-events"]
+    values = [path["value"] for path in panel["paths"]]
+    assert "/drone1/properties.property" in values
+    assert "/drone1/properties.status" in values
