@@ -26,11 +26,11 @@ from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.properties.check import VIOLATED, Verdict, evaluate
 from aeroexec.properties.signals import PERIOD_NS, PERIOD_S, SignalBuilder
 from aeroexec.properties.spec import Property, PropertySet
+from aeroexec.recording.schemas import PROPERTIES_TOPIC
 
 #: How often (session seconds) properties with an action are judged during a session.
 CHECK_EVERY_S = 0.5
-#: The topic (in the drone's namespace) verdicts are published on.
-TOPIC = "properties"
+TOPIC = PROPERTIES_TOPIC
 
 
 class PropertyMonitor:

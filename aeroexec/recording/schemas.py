@@ -264,6 +264,9 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     },
 }
 
+#: The topic (in the drone's namespace) property verdicts are published on (`--spec`).
+PROPERTIES_TOPIC = "properties"
+
 #: Topic (relative to `/<drone>/`) -> schema name. Services all use SERVICE_CALL; a topic
 #: missing here gets GENERIC_TOPIC.
 TOPIC_SCHEMAS: dict[str, str] = {
@@ -280,7 +283,7 @@ TOPIC_SCHEMAS: dict[str, str] = {
     "scene/static": FOXGLOVE_SCENE_UPDATE,
     "log": FOXGLOVE_LOG,
     "call_log": FOXGLOVE_LOG,
-    "properties": PROPERTY_VERDICT,
+    PROPERTIES_TOPIC: PROPERTY_VERDICT,
 }
 
 #: foxglove.LogLevel values by name (Python's logging names included).

@@ -52,6 +52,7 @@ from aeroexec.recording.foxglove import (
     vehicle_frame,
 )
 from aeroexec.recording.reader import Recording
+from aeroexec.recording.schemas import PROPERTIES_TOPIC
 
 #: Panel type (the part of a panel id before "!") of each panel, as Foxglove names them.
 THREE_D = "3D"
@@ -79,6 +80,8 @@ class LayoutContent:
     vehicle: bool = True
     #: The behavior events' state timeline and the last event.
     behaviors: bool = True
+    #: The property verdicts of `run/fly --spec` on the behavior events' timeline.
+    properties: bool = True
     #: One state timeline per capability (its reference count, on capability_state).
     capabilities: tuple[str, ...] = ()
     #: Log panels: (topic, title), left to right.
@@ -133,6 +136,7 @@ def content_for(recording: Recording) -> LayoutContent:
         flight=has(SCENE_TOPIC),
         vehicle=has("vehicle/state"),
         behaviors=has("behavior_event"),
+        properties=has(PROPERTIES_TOPIC),
         capabilities=tuple(names),
         logs=tuple(logs),
     )
@@ -223,15 +227,16 @@ def panels(content: LayoutContent) -> dict[str, dict[str, Any]]:
             "sidebarDimension": 240,
         }
     if content.behaviors:
+        paths = [_path(f"{event}.name", "behavior"), _path(f"{event}.code", "event")]
+        if content.properties:  # run/fly --spec: each violation and the final verdicts
+            verdicts = f"{ns}/{PROPERTIES_TOPIC}"
+            paths += [
+                _path(f"{verdicts}.property", "property"),
+                _path(f"{verdicts}.status", "verdict"),
+            ]
         out[f"{STATE_TRANSITIONS}!behavior-events"] = {
-            TITLE: "Behavior events and properties",
-            "paths": [
-                _path(f"{event}.name", "behavior"),
-                _path(f"{event}.code", "event"),
-                # run/fly --spec: each violation (and the final verdicts) as published.
-                _path(f"{ns}/properties.property", "property"),
-                _path(f"{ns}/properties.status", "verdict"),
-            ],
+            TITLE: "Behavior events and properties" if content.properties else "Behavior events",
+            "paths": paths,
             "isSynced": True,
             "showPoints": True,
         }
