@@ -21,7 +21,7 @@ import glob
 import io
 import tokenize
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +41,7 @@ from aeroexec.verifier.mission_fold import (
     MissionCall,
     fold_mission,
 )
-from aeroexec.verifier.mission_run import MissionRun
+from aeroexec.verifier.mission_run import MissionRun, called_from
 from aeroexec.verifier.registry import mission_rule
 from aeroexec.verifier.suggest import Suggester
 
@@ -246,7 +246,10 @@ class MissionChecker:
         activated = {c.behavior for c in script.calls if c.kind == "activate"}
         executed = {c.behavior for c in script.calls if c.kind == "execute"}
         for call in script.calls:
-            findings.extend(self._check_call(call, activated, executed))
+            notes = called_from(call.via)
+            findings.extend(
+                replace(f, related=notes) for f in self._check_call(call, activated, executed)
+            )
         if script.folded.entry is None:
             findings.append(
                 self._finding(
@@ -274,8 +277,11 @@ class MissionChecker:
                 )
             )
         # A call site reached with the same values twice (two callers of a helper) says
-        # the same thing once.
-        return list(dict.fromkeys(findings))
+        # the same thing once, with the first call path.
+        first: dict[Finding, Finding] = {}
+        for finding in findings:
+            first.setdefault(replace(finding, related=()), finding)
+        return list(first.values())
 
     def _finding(
         self, rule: str, severity: Severity, message: str, mark: Mark, *subjects: str

@@ -47,6 +47,7 @@ def render(report: Report, *, witness: bool = False, color: bool = False) -> str
     lines: list[str] = []
     for finding in report.findings:
         lines.append(format_finding(finding, color=color))
+        lines += [f"{note.location}: note: {note.message}" for note in finding.related]
         if witness and finding.witness is not None:
             lines.append(f"    witness: {finding.witness.describe()}")
     lines.append(summary_line(report, report.hidden))
