@@ -19,11 +19,14 @@ from aeroexec.cli.options import (
     world_option,
 )
 from aeroexec.cli.project import BehaviorsOption, first, project, project_behaviors
+from aeroexec.config import NO_VERIFY, ProjectConfig
 from aeroexec.errors import AeroexecError
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
+from aeroexec.verifier.findings import Report
 from aeroexec.verifier.registry import all_rules, get, suggest_code
 from aeroexec.verifier.report import render
+from aeroexec.verifier.selection import RuleSelection, SelectionLayer, split_selectors
 
 HELP = """Check behavior catalogs and mission scripts offline, before they fly.
 
@@ -44,7 +47,14 @@ When the project declares its behaviors (-b/--behaviors, `behaviors` in
 [tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
 catalog is also checked against that code (AX9xx: behaviors without an implementation,
 argument names the code does not read), and witnesses are completed to happen with the
-real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catalog.
+real behaviors (TAKE_OFF first, arguments).
+
+Rules are chosen as with ruff: --select, --extend-select and --ignore take codes or
+prefixes (AX7, AX71, AX711; ALL), on top of [tool.aeroexec.verify] in pyproject.toml
+(select, extend-select, ignore, per-file-ignores). A comment on a finding's line
+silences it: `# noqa: AX711` in a mission, `# aeroexec: ignore[AX401]` in a catalog.
+Without CATALOG and --mission, the `catalogs` and `missions` the project lists there
+(else its `catalog`) are checked: a bare `aeroexec verify` checks the whole project.
 
 \b
 Examples:
@@ -54,6 +64,8 @@ Examples:
   aeroexec verify catalog/default.yaml -m mission.py --world worlds/field.yaml
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
   aeroexec verify my-catalog.yaml -b mybehaviors
+  aeroexec verify --select AX7 --ignore AX708 -m 'missions/*.py'
+  aeroexec verify --statistics
   aeroexec verify --list-rules
   aeroexec verify --explain AX304
 
@@ -82,7 +94,8 @@ def verify_command(
     catalogs: list[str] = typer.Argument(
         None,
         metavar="CATALOG...",
-        help="Catalog files (YAML); glob patterns allowed. Default: the project's catalog.",
+        help="Catalog files (YAML); glob patterns allowed. Default: the catalogs of the "
+        "project's [tool.aeroexec.verify], else its catalog.",
         show_default=False,
     ),
     mission: list[str] = mission_option(
@@ -123,6 +136,34 @@ def verify_command(
     ),
     color: Color = color_option(),
     behaviors: BehaviorsOption = None,
+    select: list[str] = typer.Option(
+        None,
+        "--select",
+        metavar="CODE",
+        help="Report only these rules: codes or prefixes (AX7, ALL), comma-separated; "
+        "repeatable; replaces the project's select.",
+        show_default=False,
+    ),
+    extend_select: list[str] = typer.Option(
+        None,
+        "--extend-select",
+        metavar="CODE",
+        help="Report these rules too (codes or prefixes, comma-separated; repeatable).",
+        show_default=False,
+    ),
+    ignore: list[str] = typer.Option(
+        None,
+        "--ignore",
+        metavar="CODE",
+        help="Do not report these rules (codes or prefixes, comma-separated; repeatable); "
+        "the most specific selector wins.",
+        show_default=False,
+    ),
+    statistics: bool = typer.Option(
+        False,
+        "--statistics",
+        help="Print how many findings each rule has (count, code, name) instead of the findings.",
+    ),
 ) -> None:
     if explain is not None:
         rule = get(explain)
@@ -138,23 +179,86 @@ def verify_command(
         threshold = Severity.INFO if fmt in ("json", "sarif") else Severity.WARNING
     else:
         threshold = Severity(min_severity.value)
+    if statistics and fmt not in ("text", "json"):
+        raise AeroexecError(f"--statistics prints text or json, not {fmt}")
     settings = project()
+    configured = settings.verify or NO_VERIFY
+    if not catalogs and not mission:
+        mission = list(configured.missions)
+    if not catalogs:
+        catalogs = list(configured.catalogs)
     if not catalogs and settings.catalog is not None:
         catalogs = [str(settings.catalog)]
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
+    selection = rule_selection(settings, select, extend_select, ignore)
     found = project_behaviors(behaviors, settings)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
-    report = verify(catalogs, mission, world=limits, behaviors=found if found.declared else None)
+    report = verify(
+        catalogs,
+        mission,
+        world=limits,
+        behaviors=found if found.declared else None,
+        selection=selection,
+    )
     shown = report.at_least(threshold)
     styled = use_color(color)
-    text = render(shown, fmt, witness=witness, color=styled)
+    if statistics:
+        text = statistics_listing(shown, fmt)
+    else:
+        text = render(shown, fmt, witness=witness, color=styled)
     typer.echo(text, nl=False, color=styled)
     for error in report.input_errors:
         error_line(str(error))
     # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))
+
+
+def rule_selection(
+    settings: ProjectConfig,
+    select: list[str] | None,
+    extend_select: list[str] | None,
+    ignore: list[str] | None,
+) -> RuleSelection | None:
+    """The project's [tool.aeroexec.verify] selection, then the command line's, as
+    layers (None when neither says anything)."""
+    configured = settings.verify or NO_VERIFY
+    layers = []
+    if configured.select is not None or configured.extend_select or configured.ignore:
+        layers.append(
+            SelectionLayer(
+                split_selectors(configured.select) if configured.select is not None else None,
+                split_selectors(configured.extend_select),
+                split_selectors(configured.ignore),
+            )
+        )
+    if select or extend_select or ignore:
+        layers.append(
+            SelectionLayer(
+                split_selectors(select) if select else None,
+                split_selectors(extend_select or ()),
+                split_selectors(ignore or ()),
+            )
+        )
+    per_file = {pattern: split_selectors(codes) for pattern, codes in configured.per_file_ignores}
+    if not layers and not per_file:
+        return None
+    return RuleSelection(tuple(layers), per_file, settings.root)
+
+
+def statistics_listing(report: Report, fmt: str) -> str:
+    """How many findings each rule has, most first (ruff's --statistics)."""
+    counts: dict[str, int] = {}
+    for finding in report.findings:
+        counts[finding.rule] = counts.get(finding.rule, 0) + 1
+    ordered = sorted(counts.items(), key=lambda item: (-item[1], item[0]))
+    names = {code: (rule.name if (rule := get(code)) else "") for code, _ in ordered}
+    if fmt == "json":
+        listing = [{"code": c, "name": names[c], "count": n} for c, n in ordered]
+        return json.dumps(listing, indent=2) + "\n"
+    width = max((len(str(n)) for _, n in ordered), default=1)
+    return "".join(f"{n:>{width}}\t{c}\t{names[c]}\n" for c, n in ordered)
 
 
 def rules_listing(output_format: VerifyFormat) -> str:

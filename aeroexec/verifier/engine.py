@@ -31,6 +31,7 @@ from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
     from aeroexec.verifier.missions import MissionScript
+    from aeroexec.verifier.selection import RuleSelection
 
 CatalogInput = str | Path | Catalog | TaskCatalog
 Library = Mapping[str, type[Behavior]]
@@ -185,6 +186,8 @@ def verify(
     world: World | None = None,
     library: Library | None = None,
     behaviors: BehaviorSet | None = None,
+    selection: RuleSelection | None = None,
+    in_place: bool = True,
 ) -> Report:
     """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
     the mission scripts (paths, glob patterns or parsed scripts) that use them; every
@@ -195,11 +198,45 @@ def verify(
     and the rest are verified all the same. `world` (the vehicle's limits) and `library`
     (the behavior implementations, for their declared situations and destinations)
     default to the built-in world and the standard library.
+
+    `selection` keeps the rules (and per-file ignores) asked for (default: every
+    rule); with `in_place`, a finding whose line carries a suppression comment
+    (`# noqa: AX711`, `# aeroexec: ignore[AX401]`) is left out and counted in
+    `Report.suppressed`.
     """
     # The rules build graphs and indexes as large as the catalog: no cyclic garbage
     # worth the collector's passes over everything already loaded.
     with paused_gc():
-        return _verify(catalogs, missions, world, library, behaviors)
+        report = _verify(catalogs, missions, world, library, behaviors)
+    return filter_report(report, selection, in_place)
+
+
+def filter_report(
+    report: Report, selection: RuleSelection | None = None, in_place: bool = True
+) -> Report:
+    """The report less the findings `selection` does not ask for, and (with
+    `in_place`) less those a comment on their line suppresses."""
+    findings = report.findings
+    if selection is not None and not selection.everything:
+        findings = tuple(f for f in findings if selection.enabled(f.rule, f.file))
+    suppressed = 0
+    if in_place and findings:
+        from aeroexec.verifier.suppress import Suppressions
+
+        comments = Suppressions()
+        kept = tuple(f for f in findings if not comments.suppressed(f.file, f.line, f.rule))
+        suppressed = len(findings) - len(kept)
+        findings = kept
+    if findings is report.findings:
+        return report
+    return Report(
+        findings,
+        report.catalogs,
+        report.missions,
+        report.hidden,
+        report.input_errors,
+        report.suppressed + suppressed,
+    )
 
 
 def _verify(

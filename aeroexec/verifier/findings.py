@@ -283,6 +283,8 @@ class Report:
     hidden: int = 0
     #: Inputs that could not be read (the others were verified all the same).
     input_errors: tuple[InputError, ...] = ()
+    #: Findings silenced by a comment in place (noqa, or aeroexec: ignore[...]).
+    suppressed: int = 0
     _counts: Mapping[Severity, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -325,6 +327,7 @@ class Report:
             self.missions,
             self.hidden + len(self.findings) - len(kept),
             self.input_errors,
+            self.suppressed,
         )
 
     def by_rule(self, rule: str) -> tuple[Finding, ...]:

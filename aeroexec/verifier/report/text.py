@@ -33,6 +33,8 @@ def summary_line(report: Report, hidden: int = 0) -> str:
     line = f"{', '.join(counts)} in {_plural(inputs, 'file')}"
     if hidden:
         line += f" ({_plural(hidden, 'finding')} below --min-severity not shown)"
+    if report.suppressed:
+        line += f" ({report.suppressed} suppressed in place)"
     if report.input_errors:
         unread = len(report.input_errors)
         line += f"; {_plural(unread, 'input')} could not be read"
