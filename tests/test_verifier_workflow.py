@@ -176,3 +176,68 @@ def test_a_wrong_verify_key_is_a_config_error_with_its_line(project: Path) -> No
     result = runner.invoke(app, ["verify"])
     assert result.exit_code == 2
     assert "pyproject.toml:2:1: error: unknown key 'verify.selekt'" in result.output
+
+
+# -- --fix and --diff -----------------------------------------------------------------------
+ONE_SIDED = (
+    "behavior_descriptors:\r\n"
+    "  - behavior: DOCK   # the dock\r\n"
+    "    timeout: 10\r\n"
+    "    recurrent: no\r\n"
+    "    incompatible_lists: [motion]\r\n"
+    "  - behavior: GO_TO\r\n"
+    "    timeout: 10\r\n"
+    "\r\n"
+    "    recurrent: no\r\n"
+    "  # a comment that stays, \u00e9t\u00e9\r\n"
+    "behavior_lists:\r\n"
+    "  - list: motion\r\n"
+    "    behaviors: [GO_TO, DOCK]\r\n"
+    "capability_descriptors: []"  # no newline at the end
+)
+
+
+def test_fix_makes_a_one_sided_preemption_mutual_and_changes_nothing_else(
+    project: Path,
+) -> None:
+    catalog = project / "one.yaml"
+    catalog.write_bytes(ONE_SIDED.encode("utf-8"))
+    catalog.chmod(0o640)
+    shown = runner.invoke(app, ["verify", "one.yaml", "--diff"])
+    assert shown.exit_code == 1
+    assert "+    incompatible_lists: [motion]" in shown.output
+    assert catalog.read_bytes() == ONE_SIDED.encode("utf-8")  # --diff changes nothing
+    fixed = runner.invoke(app, ["verify", "one.yaml", "--fix"])
+    assert fixed.exit_code == 0, fixed.output
+    assert "AX401" not in fixed.output
+    expected = ONE_SIDED.replace(
+        "    recurrent: no\r\n  # a comment",
+        "    recurrent: no\r\n    incompatible_lists: [motion]\r\n  # a comment",
+    )
+    assert catalog.read_bytes() == expected.encode("utf-8")
+    assert catalog.stat().st_mode & 0o777 == 0o640
+    again = runner.invoke(app, ["verify", "one.yaml", "--diff"])
+    assert again.exit_code == 0 and again.output.startswith("aeroexec verify: note: 0 fixes")
+
+
+def test_an_ambiguous_one_sided_preemption_gets_no_fix(project: Path) -> None:
+    # GO_TO is preempted by DOCK through `motion`, but no list holds DOCK: which list
+    # GO_TO should name is a design decision.
+    before = (project / "catalog.yaml").read_bytes()
+    result = runner.invoke(app, ["verify", "catalog.yaml", "--fix"])
+    assert "AX401" in result.output
+    assert (project / "catalog.yaml").read_bytes() == before
+
+
+def test_fix_indents_a_misindented_parameter_key_byte_for_byte(project: Path) -> None:
+    source = (FIXTURES / "tasks" / "AX803.yaml").read_bytes()
+    catalog = project / "tasks.yaml"
+    catalog.write_bytes(source)
+    result = runner.invoke(app, ["verify", "tasks.yaml", "--fix"])
+    assert "AX803" not in result.output, result.output
+    expected = source.replace(
+        b"  - parameter: path\n  allowed_values: point_list",
+        b"  - parameter: path\n    allowed_values: point_list",
+    )
+    assert expected != source
+    assert catalog.read_bytes() == expected

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import shutil
 from enum import Enum
+from pathlib import Path
 
 import typer
 
 from aeroexec.catalog.model import Severity
-from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.app import app, error_line, guarded, say
 from aeroexec.cli.options import (
     Color,
     choices,
@@ -21,9 +23,11 @@ from aeroexec.cli.options import (
 from aeroexec.cli.project import BehaviorsOption, first, project, project_behaviors
 from aeroexec.config import NO_VERIFY, ProjectConfig
 from aeroexec.errors import AeroexecError
+from aeroexec.outputs import whole_file_or_none
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
 from aeroexec.verifier.findings import Report
+from aeroexec.verifier.fixes import fixed_files, fixes_for, unified_diff
 from aeroexec.verifier.registry import all_rules, get, suggest_code
 from aeroexec.verifier.report import render
 from aeroexec.verifier.selection import RuleSelection, SelectionLayer, split_selectors
@@ -66,6 +70,7 @@ Examples:
   aeroexec verify my-catalog.yaml -b mybehaviors
   aeroexec verify --select AX7 --ignore AX708 -m 'missions/*.py'
   aeroexec verify --statistics
+  aeroexec verify --diff        # then --fix
   aeroexec verify --list-rules
   aeroexec verify --explain AX304
 
@@ -164,6 +169,18 @@ def verify_command(
         "--statistics",
         help="Print how many findings each rule has (count, code, name) instead of the findings.",
     ),
+    fix: bool = typer.Option(
+        False,
+        "--fix",
+        help="Apply the mechanical fixes (AX803 misindented keys, AX401 one-sided "
+        "preemption where unambiguous), then report what remains.",
+    ),
+    diff: bool = typer.Option(
+        False,
+        "--diff",
+        help="Print the fixes --fix would apply as a unified diff, change nothing; exit 1 "
+        "when there is one.",
+    ),
 ) -> None:
     if explain is not None:
         rule = get(explain)
@@ -195,13 +212,32 @@ def verify_command(
     found = project_behaviors(behaviors, settings)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
-    report = verify(
-        catalogs,
-        mission,
-        world=limits,
-        behaviors=found if found.declared else None,
-        selection=selection,
-    )
+
+    def run() -> Report:
+        return verify(
+            catalogs,
+            mission,
+            world=limits,
+            behaviors=found if found.declared else None,
+            selection=selection,
+        )
+
+    report = run()
+    if fix or diff:
+        fixes = fixes_for(report.findings)
+        changes = fixed_files(fixes)
+        if diff:
+            typer.echo("".join(unified_diff(f, *change) for f, change in changes.items()), nl=False)
+            say(
+                "note",
+                f"{_plural(len(fixes), 'fix')} in {_plural(len(changes), 'file')} would apply",
+            )
+            raise typer.Exit(1 if changes else 0)
+        for file, (_, after) in changes.items():
+            write_fixed(Path(file), after)
+        if changes:
+            report = run()
+            say("note", f"{_plural(len(fixes), 'fix')} applied in {_plural(len(changes), 'file')}")
     shown = report.at_least(threshold)
     styled = use_color(color)
     if statistics:
@@ -213,6 +249,17 @@ def verify_command(
         error_line(str(error))
     # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}{'' if count == 1 else 'es' if word.endswith('x') else 's'}"
+
+
+def write_fixed(path: Path, content: bytes) -> None:
+    """Replace a file by its fixed bytes, whole or not at all, keeping its mode."""
+    with whole_file_or_none(path, AeroexecError) as temporary:
+        temporary.write_bytes(content)
+        shutil.copymode(path, temporary)
 
 
 def rule_selection(
