@@ -17,9 +17,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from aeroexec import interrupts
-from aeroexec.catalog.formats import AnyCatalog, read_any_catalog
+from aeroexec.catalog.formats import AnyCatalog, catalog_from_root, read_any_catalog
+from aeroexec.catalog.loader import read_catalog_text
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.tasks import TaskCatalog
+from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.executive.behavior import Behavior
 from aeroexec.gc_pause import paused_gc
@@ -30,6 +32,7 @@ from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
 
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
+    from aeroexec.verifier.bt_missions import BtMission
     from aeroexec.verifier.missions import MissionScript
     from aeroexec.verifier.selection import RuleSelection
 
@@ -136,7 +139,20 @@ def verify_catalog_file(path: str | Path) -> Report:
     return verify_catalog(read_any_catalog(path))
 
 
-def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) -> list[AnyCatalog]:
+def _looks_like_bt_mission(root: YNode | None) -> bool:
+    # Checked before importing the mission checks (start-up time of a catalog run).
+    return (
+        root is not None
+        and root.is_map
+        and root.get("nodes") is not None
+        and not any(root.get(k) is not None for k in ("behavior_descriptors", "behaviors", "tasks"))
+    )
+
+
+def _read_catalogs(
+    sources: Sequence[CatalogInput], errors: list[InputError], trees: list[BtMission]
+) -> list[AnyCatalog]:
+    """The catalogs; a behavior-tree mission given among them goes to `trees`."""
     loaded: list[AnyCatalog] = []
     for source in sources:
         if isinstance(source, (Catalog, TaskCatalog)):
@@ -150,17 +166,28 @@ def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) ->
         for path in paths:
             interrupts.check()
             try:
-                loaded.append(read_any_catalog(path))
+                text, file = read_catalog_text(path)
+                root = load_yaml(text, file)
+                if _looks_like_bt_mission(root):
+                    from aeroexec.verifier.bt_missions import parse_bt_mission
+
+                    trees.append(parse_bt_mission(root, file))
+                else:
+                    loaded.append(catalog_from_root(root, text, file))
             except AeroexecError as exc:
                 errors.append(InputError.of(exc, path))
     return loaded
 
 
 def _read_missions(
-    sources: Sequence[str | Path | MissionScript], errors: list[InputError]
+    sources: Sequence[str | Path | MissionScript],
+    errors: list[InputError],
+    trees: list[BtMission],
 ) -> list[MissionScript]:
+    """Python mission scripts; behavior-tree missions (`.yaml`, `.yml`) go to `trees`."""
     if not sources:
         return []
+    from aeroexec.verifier.bt_missions import read_bt_mission
     from aeroexec.verifier.missions import MissionScript, expand_mission_paths, read_mission
 
     scripts = [m for m in sources if isinstance(m, MissionScript)]
@@ -173,7 +200,10 @@ def _read_missions(
         for path in paths:
             interrupts.check()
             try:
-                scripts.append(read_mission(path))
+                if Path(path).suffix.lower() in (".yaml", ".yml"):
+                    trees.append(read_bt_mission(path))
+                else:
+                    scripts.append(read_mission(path))
             except AeroexecError as exc:
                 errors.append(InputError.of(exc, path))
     return scripts
@@ -249,8 +279,9 @@ def _verify(
     if library is None and behaviors is not None:
         library = behaviors.library()
     errors: list[InputError] = []
-    loaded = _read_catalogs(catalogs, errors)
-    scripts = _read_missions(missions, errors)
+    trees: list[BtMission] = []
+    loaded = _read_catalogs(catalogs, errors, trees)
+    scripts = _read_missions(missions, errors, trees)
     findings: list[Finding] = []
     behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
@@ -266,9 +297,27 @@ def _verify(
         note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:
             findings.extend(check_mission(script, catalog, note, library=library, world=world))
+    # Behavior-tree missions start tasks: they are checked against the task catalogs.
+    if trees:
+        from aeroexec.verifier.bt_missions import check_bt_mission
+
+        task_catalogs = [c for c in loaded if isinstance(c, TaskCatalog)]
+        if not task_catalogs:
+            errors.extend(
+                InputError(
+                    "a behavior-tree mission starts tasks: give a task catalog (Aerostack "
+                    "4.x, 'tasks:') to check it against",
+                    tree.path,
+                )
+                for tree in trees
+            )
+        for catalog in task_catalogs:
+            note = f" [catalog {catalog.source}]" if len(task_catalogs) > 1 else ""
+            for tree in trees:
+                findings.extend(check_bt_mission(tree, catalog, note))
     return Report(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),
-        missions=tuple(s.path for s in scripts),
+        missions=(*(s.path for s in scripts), *(t.path for t in trees)),
         input_errors=tuple(errors),
     )

@@ -141,6 +141,3 @@ def split_selectors(values: Iterable[str]) -> tuple[str, ...]:
     return tuple(
         part.strip().upper() for value in values for part in value.split(",") if part.strip()
     )
-
-
-EVERYTHING = RuleSelection()

@@ -1,0 +1,109 @@
+"""Aerostack's behavior-tree missions (YAML `nodes:`), verified against their task
+catalog: every node's task exists and is performed, its parameters fit, and the tree
+runs as a sequence on the task coordinator's model (the files are Aerostack's own,
+copied from the project's shared data)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from aeroexec.cli import app
+
+BT = Path(__file__).resolve().parent / "fixtures" / "verifier" / "bt"
+CATALOG = BT / "aerostack_behavior_catalog_tello.yaml"
+TELLO = BT / "aerostack_bt_mission_tello.yaml"
+AIRPLANE = BT / "aerostack_bt_mission_airplane_inspection.yaml"
+runner = CliRunner()
+
+
+def findings(*paths: Path | str, missions: tuple[Path, ...] = ()) -> list[dict]:
+    args = ["verify", *map(str, paths), "-f", "json"]
+    for mission in missions:
+        args += ["-m", str(mission)]
+    result = runner.invoke(app, args)
+    document = json.loads(result.output)
+    assert document["inputErrors"] == [], document["inputErrors"]
+    return [
+        f
+        for f in document["findings"]
+        if not f["file"].endswith("tello.yaml") or "bt_" in f["file"]
+    ]
+
+
+def about(found: list[dict], mission: Path) -> list[tuple[str, int, tuple[str, ...]]]:
+    return [
+        (f["rule"], f["line"], tuple(f["subjects"])) for f in found if f["file"] == str(mission)
+    ]
+
+
+def test_aerostack_missions_are_verified_against_their_catalog() -> None:
+    found = findings(CATALOG, TELLO, AIRPLANE)
+    # Every task exists and every parameter fits: only the sequence speaks.
+    assert about(found, TELLO) == [
+        ("AX716", 12, ("TAKE_OFF", "MOVE_VERTICAL")),
+        ("AX716", 26, ("MOVE_VERTICAL", "ROTATE")),
+        ("AX716", 35, ("ROTATE", "MOVE_AT_SPEED")),
+    ]
+    assert about(found, AIRPLANE) == [("AX716", 77, ("ROTATE", "FOLLOW_PATH"))]
+    # The same through --mission.
+    again = findings(CATALOG, missions=(TELLO,))
+    assert about(again, TELLO) == about(found, TELLO)
+
+
+def test_waiting_for_each_task_leaves_nothing_to_say(tmp_path: Path) -> None:
+    mission = tmp_path / "waited.yaml"
+    mission.write_text(
+        TELLO.read_text().replace("wait_for_completion: false", "wait_for_completion: true")
+    )
+    assert about(findings(CATALOG, mission), mission) == []
+
+
+@pytest.mark.parametrize(
+    ("change", "rule", "subjects"),
+    [
+        (("task: MOVE_VERTICAL", "task: MOVE_VERTICALLY"), "AX701", ("MOVE_VERTICALLY",)),
+        (('"distance: 1"', '"dist: 1"'), "AX702", ("MOVE_VERTICAL", "dist")),
+        (('"distance: 1"', '"distance: 500"'), "AX703", ("MOVE_VERTICAL", "distance")),
+        (
+            ("\"direction: 'FORWARD'\"", "\"direction: 'UP'\""),
+            "AX703",
+            ("MOVE_AT_SPEED", "direction"),
+        ),
+    ],
+)
+def test_a_node_that_does_not_fit_the_catalog(
+    tmp_path: Path, change: tuple[str, str], rule: str, subjects: tuple[str, ...]
+) -> None:
+    mission = tmp_path / "bad.yaml"
+    text = TELLO.read_text()
+    assert change[0] in text
+    mission.write_text(text.replace(*change))
+    assert (rule, subjects) in [(r, s) for r, _, s in about(findings(CATALOG, mission), mission)]
+
+
+def test_a_path_point_with_two_numbers_is_a_dimension_error(tmp_path: Path) -> None:
+    mission = tmp_path / "bad.yaml"
+    mission.write_text(AIRPLANE.read_text().replace("[[ -5.2,0,2]]", "[[ -5.2,0]]"))
+    assert ("AX704", 87, ("FOLLOW_PATH", "path")) in about(findings(CATALOG, mission), mission)
+
+
+def test_a_start_the_coordinator_rejects(tmp_path: Path) -> None:
+    # TAKE_OFF's only behavior now needs a task no behavior performs.
+    take_off = "- behavior: TAKE_OFF\n  package: basic_quadrotor_behaviors\n  task: TAKE_OFF\n"
+    text = CATALOG.read_text()
+    assert take_off in text
+    catalog = tmp_path / "catalog.yaml"
+    catalog.write_text(text.replace(take_off, take_off + "  requires:\n  - task: GIMBAL\n"))
+    rejected = [f for f in findings(catalog, TELLO) if f["rule"] == "AX717"]
+    assert [(f["line"], f["subjects"]) for f in rejected] == [(12, ["TAKE_OFF"])]
+    assert "GIMBAL" in rejected[0]["message"]
+
+
+def test_a_tree_mission_without_a_task_catalog_is_an_input_error() -> None:
+    result = runner.invoke(app, ["verify", "catalog/default.yaml", "-m", str(TELLO)])
+    assert result.exit_code == 2
+    assert "a behavior-tree mission starts tasks: give a task catalog" in result.output
