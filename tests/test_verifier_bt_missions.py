@@ -107,3 +107,36 @@ def test_a_tree_mission_without_a_task_catalog_is_an_input_error() -> None:
     result = runner.invoke(app, ["verify", "catalog/default.yaml", "-m", str(TELLO)])
     assert result.exit_code == 2
     assert "a behavior-tree mission starts tasks: give a task catalog" in result.output
+
+
+# -- witnesses of task catalogs (issue 30, point 6) -----------------------------------------
+def test_task_witnesses_are_replayed_on_the_model_and_say_so() -> None:
+    from aeroexec.catalog.formats import read_any_catalog
+    from aeroexec.verifier import check_task_catalog
+    from aeroexec.verifier.task_witness import FAILS, HOLDS
+
+    tasks = Path(__file__).resolve().parent / "fixtures" / "verifier" / "tasks"
+    witnessed = []
+    for path in sorted(tasks.glob("AX8*.yaml")):
+        catalog = read_any_catalog(path)
+        witnessed += [f for f in check_task_catalog(catalog) if f.witness is not None]  # type: ignore[arg-type]
+    assert len(witnessed) >= 5
+    assert all(f.witness.caveat.endswith(HOLDS) for f in witnessed)  # type: ignore[union-attr]
+    assert not any(FAILS in f.witness.caveat for f in witnessed)  # type: ignore[union-attr]
+    shown = runner.invoke(app, ["verify", str(tasks / "AX814.yaml"), "--witness"])
+    assert (
+        "(replayed on the model of the 2021 task coordinator; `aeroexec run` runs" in shown.output
+    )
+
+
+def test_a_witness_the_model_does_not_give_is_marked() -> None:
+    from aeroexec.catalog.formats import read_any_catalog
+    from aeroexec.verifier.findings import Outcome, Step, Witness
+    from aeroexec.verifier.task_model import TaskModel
+    from aeroexec.verifier.task_witness import replays
+
+    catalog = read_any_catalog(CATALOG)
+    model = TaskModel(catalog)  # type: ignore[arg-type]
+    take_off = (Step("TAKE_OFF", service="start_task"),)
+    assert replays(model, Witness(take_off, Outcome.ALL_ACTIVE))
+    assert not replays(model, Witness(take_off, Outcome.REJECTED))

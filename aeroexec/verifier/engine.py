@@ -113,7 +113,10 @@ def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None)
             continue
         assert rule.check is not None
         findings.extend(rule.check(context))  # type: ignore[arg-type]
-    return findings
+    # `run` cannot run a task catalog: its witnesses are replayed on the model instead.
+    from aeroexec.verifier.task_witness import checked_on_model
+
+    return checked_on_model(catalog, findings)
 
 
 def check_any_catalog(
