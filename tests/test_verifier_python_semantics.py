@@ -207,3 +207,28 @@ def test_a_sequence_finding_in_a_helper_names_its_call_site_too() -> None:
     )
     assert rejected.line == 4
     assert [(r.line, r.message) for r in rejected.related] == [(7, "in land(), called from here")]
+
+
+def test_a_with_body_finding_names_no_context_manager_as_its_caller() -> None:
+    [rejected] = findings(
+        """\
+        from contextlib import contextmanager
+
+        from executive_engine_api import activate_behavior, execute_behavior, inhibit_behavior
+
+        @contextmanager
+        def attention():
+            activate_behavior('PAY_ATTENTION')
+            try:
+                yield
+            finally:
+                inhibit_behavior('PAY_ATTENTION')
+
+        def runMission():
+            with attention():
+                execute_behavior('LAND')
+        """,
+        "AX711",
+    )
+    assert (rejected.line, rejected.related) == (15, ())
+    assert "7: activate PAY_ATTENTION; 15: execute LAND" in rejected.message

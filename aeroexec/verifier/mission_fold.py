@@ -360,8 +360,11 @@ class Folder:
         #: `names.append(...)`): the folder never trusts their contents.
         self.mutated: set[str] = set()
         #: `with` bodies waiting for the `yield` of their `@contextmanager` helper:
-        #: (statements, the caller's environment), innermost last.
-        self.with_bodies: list[tuple[Sequence[ast.stmt], dict[str, Any]]] = []
+        #: (statements, the caller's environment, how many helpers are inlined while
+        #: the helper's own body runs), innermost last.
+        self.with_bodies: list[
+            tuple[Sequence[ast.stmt], dict[str, Any], int, list[tuple[str, Mark]]]
+        ] = []
 
     def mark(self, node: ast.AST) -> Mark:
         """1-based line and character column (ast counts UTF-8 bytes)."""
@@ -404,11 +407,20 @@ class Folder:
             self.nesting -= 1
 
     def statement(self, node: ast.stmt, env: dict[str, Any]) -> Iterator[Node]:
-        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Yield) and self.with_bodies:
-            # The `yield` of a @contextmanager helper: the `with` body runs here, in
-            # its caller's environment.
-            body, caller_env = self.with_bodies.pop()
-            yield from self.block(body, caller_env)
+        if (
+            isinstance(node, ast.Expr)
+            and isinstance(node.value, ast.Yield)
+            and self.with_bodies
+            and self.with_bodies[-1][2] == len(self.functions_on_stack)
+        ):
+            # The `yield` of a @contextmanager helper (its own, not one of a generator
+            # it calls): the `with` body runs here, in its caller's environment.
+            body, caller_env, _, caller_via = self.with_bodies.pop()
+            inside, self.via = self.via, caller_via  # the body's calls are the caller's
+            try:
+                yield from self.block(body, caller_env)
+            finally:
+                self.via = inside
         elif isinstance(node, ast.Expr):
             yield from self.expression_calls(node.value, env)
         elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
@@ -478,7 +490,8 @@ class Folder:
             inner = [ast.With(items=list(rest), body=list(body))] if rest else list(body)
             for statement in inner:
                 ast.copy_location(statement, item.context_expr)
-            self.with_bodies.append((inner, env))
+            level = len(self.functions_on_stack) + 1
+            self.with_bodies.append((inner, env, level, list(self.via)))
             depth = len(self.with_bodies)
             self.via.append((function.node.name, self.mark(call)))
             try:
