@@ -73,6 +73,7 @@ def test_waiting_for_each_task_leaves_nothing_to_say(tmp_path: Path) -> None:
             "AX703",
             ("MOVE_AT_SPEED", "direction"),
         ),
+        (('"distance: 1"', '"distance: [1"'), "AX702", ("MOVE_VERTICAL",)),
     ],
 )
 def test_a_node_that_does_not_fit_the_catalog(

@@ -78,12 +78,14 @@ class BtNode:
     kind: str  # "control_flow" | "execution" | ...
     subtype: str
     task: str | None
-    parameters: dict[str, Any] | None  # None: no parameters; {} when unreadable
+    parameters: dict[str, Any] | None  # None: no parameters, or unreadable ones
     wait: bool
     parent: int
     mark: Mark
     task_mark: Mark
     parameters_mark: Mark
+    #: The `parameters` text when it cannot be read as `name: value` pairs.
+    unreadable: str | None = None
     children: list[BtNode] = field(default_factory=list, compare=False)
 
     @property
@@ -158,9 +160,12 @@ def _node(entry: YNode) -> BtNode:
         return str(value.text) if value is not None and value.value is not None else ""
 
     parameters: dict[str, Any] | None = None
+    unreadable: str | None = None
     given = entry.get("parameters")
     if given is not None and given.value is not None:
         parameters = _parameters(given)
+        if parameters is None:
+            unreadable = str(given.text)
     waiting = entry.get("wait_for_completion")
     wait = bool(waiting.value) if waiting is not None and isinstance(waiting.value, bool) else True
     task = entry.get("task") or entry.get("behavior")
@@ -176,16 +181,17 @@ def _node(entry: YNode) -> BtNode:
         entry.mark,
         task.mark if task is not None else entry.mark,
         given.mark if given is not None else entry.mark,
+        unreadable,
     )
 
 
-def _parameters(given: YNode) -> dict[str, Any]:
+def _parameters(given: YNode) -> dict[str, Any] | None:
     """`parameters: "angle: 90, speed: 1"` (YAML text, as the editor writes it) or a
-    mapping; {} when it cannot be read as one."""
+    mapping; None when it cannot be read as one."""
     if given.is_map:
         return given.plain()  # type: ignore[no-any-return]
     if not isinstance(given.value, str):
-        return {}
+        return None
     for text in (given.value, "{" + given.value + "}"):
         try:
             parsed = load_yaml(text, given.mark.file)
@@ -193,7 +199,7 @@ def _parameters(given: YNode) -> dict[str, Any]:
             continue
         if parsed is not None and parsed.is_map:
             return parsed.plain()  # type: ignore[no-any-return]
-    return {}
+    return None
 
 
 def _refuse_cycles(nodes: dict[int, BtNode]) -> None:
@@ -232,6 +238,15 @@ def _check_node(
         )
         yield Finding.at(UNKNOWN_BEHAVIOR, E, f"{node.shown}: {why}{note}", node.task_mark, (task,))
         return
+    if node.unreadable is not None:
+        yield Finding.at(
+            UNKNOWN_ARGUMENT,
+            E,
+            f"{node.shown}: the parameters of {task} cannot be read as 'name: value' pairs: "
+            f"{node.unreadable!r}{note}",
+            node.parameters_mark,
+            (task,),
+        )
     declared = {spec.name.casefold(): spec for spec in descriptor.parameters}
     for name, value in (node.parameters or {}).items():
         spec = declared.get(str(name).casefold())
