@@ -232,3 +232,35 @@ def test_a_with_body_finding_names_no_context_manager_as_its_caller() -> None:
     )
     assert (rejected.line, rejected.related) == (15, ())
     assert "7: activate PAY_ATTENTION; 15: execute LAND" in rejected.message
+
+
+def test_a_while_loop_on_a_counter_runs_exactly_its_iterations() -> None:
+    [twice] = findings(
+        """\
+        from executive_engine_api import execute_behavior
+
+        def runMission():
+            n = 0
+            while n < 2:
+                execute_behavior('TAKE_OFF')
+                n += 1
+            execute_behavior('LAND')
+        """,
+        "AX711",
+    )
+    assert twice.line == 6 and "iteration #2" in twice.message
+    # A condition the run decides is still explored as a loop.
+    looping = findings(
+        """\
+        from executive_engine_api import execute_behavior, true_belief
+
+        def runMission():
+            n = 0
+            while n < 2 and true_belief('battery(high)'):
+                execute_behavior('TAKE_OFF')
+                n += 1
+        """,
+        "AX711",
+    )
+    assert [f.line for f in looping] == [6]
+    assert "loop #2" in looping[0].message

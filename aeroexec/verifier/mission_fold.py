@@ -5,8 +5,9 @@ The script's AST is interpreted abstractly, from its entry point (`runMission()`
 
 * constants are folded: a behavior name in a variable (`name = 'TAKE_OFF'`), string
   arithmetic, a name looked up in a dict or list that nothing mutates (`NAMES['up']`,
-  `NAMES.get('up')`), a loop over a literal list of names or a constant `range(n)`
-  (unrolled, `break` and `continue` included), helper functions called with constant
+  `NAMES.get('up')`), a loop over a literal list of names or a constant `range(n)`,
+  and a `while` on a counter the body changes (`n < 3`, `n += 1`), unrolled, `break`
+  and `continue` included, helper functions called with constant
   arguments (inlined, also for their return value), aliases of the API (`go =
   api.executeBehavior`, `from executive_engine_api import executeBehavior as go`);
 * `try`/`except`/`else`/`finally` and `with` keep Python's semantics (`Try`): a
@@ -670,6 +671,11 @@ class Folder:
         if is_known(condition) and not condition:
             yield from self.block(node.orelse, env)
             return
+        if is_known(condition) and not nodes:
+            unrolled = self.unroll_while(node, env)
+            if unrolled is not None:
+                yield unrolled
+                return
         forever = is_known(condition)
         self.forget_assigned(node, env)
         test_nodes = self.expression_calls(node.test, env)
@@ -682,6 +688,49 @@ class Folder:
         yield Loop(self.mark(node), body, may_skip=not forever, ends_by_condition=not forever)
         if not forever:
             yield from self.block(node.orelse, env)
+
+    def unroll_while(self, node: ast.While, env: dict[str, Any]) -> Unrolled | None:
+        """A `while` whose condition is a constant the body changes (`n < 3` with `n += 1`),
+        run iteration by iteration while the condition stays known: exactly its
+        iterations, as a `for` over a constant range. None (and nothing recorded) when
+        the condition becomes unknown, or more than MAX_UNROLL iterations would run."""
+        assigned = {
+            child.id
+            for child in ast.walk(node)
+            if isinstance(child, ast.Name) and isinstance(child.ctx, ast.Store)
+        }
+        assigned |= {
+            child.target.id
+            for child in ast.walk(node)
+            if isinstance(child, ast.AugAssign) and isinstance(child.target, ast.Name)
+        }
+        read = {child.id for child in ast.walk(node.test) if isinstance(child, ast.Name)}
+        if not read & assigned:
+            return None  # `while True:` and the like: only a jump leaves it
+        trial = dict(env)
+        calls, unchecked = len(self.calls), dict(self.unchecked)
+        iterations: list[Flow] = []
+        broke = False
+        while True:
+            tested, condition = self.evaluate_with_calls(node.test, trial)
+            if tested or not is_known(condition) or len(iterations) >= MAX_UNROLL:
+                del self.calls[calls:]
+                self.unchecked = unchecked
+                return None
+            if not condition:
+                break
+            flow = self.block(node.body, trial)
+            iterations.append(flow)
+            if flow and isinstance(flow[-1], Jump) and flow[-1].kind != "continue":
+                broke = True
+                break
+        if _jumps_out(node.body):
+            # Which iteration broke out is only known when the mission runs.
+            self.forget_assigned(node, trial)
+        env.clear()
+        env.update(trial)
+        orelse = () if broke else self.block(node.orelse, env)
+        return Unrolled(self.mark(node), tuple(iterations), orelse)
 
     # -- expressions -----------------------------------------------------------------------
     def expression_calls(self, node: ast.expr, env: dict[str, Any]) -> Flow:
