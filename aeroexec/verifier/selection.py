@@ -57,18 +57,20 @@ class RuleSelection:
             for selector in selectors:
                 check_selector(selector, codes)
         object.__setattr__(self, "_enabled", _resolve(self.layers, codes))
+        object.__setattr__(self, "_known", codes)
         object.__setattr__(self, "_files", {})
 
     @property
     def everything(self) -> bool:
         """Whether every rule is reported everywhere (nothing to filter)."""
-        return not self.per_file_ignores and self.enabled_codes() >= _known_codes()
+        return not self.per_file_ignores and self.enabled_codes() >= self._known  # type: ignore[attr-defined]
 
     def enabled_codes(self) -> frozenset[str]:
         return self._enabled  # type: ignore[attr-defined,no-any-return]
 
     def enabled(self, code: str, file: str = "") -> bool:
-        if code not in self._enabled and code in _known_codes():  # type: ignore[attr-defined]
+        known: frozenset[str] = self._known  # type: ignore[attr-defined]
+        if code not in self._enabled and code in known:  # type: ignore[attr-defined]
             return False
         if file and self.per_file_ignores:
             ignored = self._ignored_in(file)
