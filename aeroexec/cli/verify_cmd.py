@@ -22,6 +22,7 @@ from aeroexec.cli.options import (
 )
 from aeroexec.cli.project import BehaviorsOption, first, project, project_behaviors
 from aeroexec.config import NO_VERIFY, ProjectConfig
+from aeroexec.display import shown as shown_path
 from aeroexec.errors import AeroexecError
 from aeroexec.outputs import whole_file_or_none
 from aeroexec.vehicles.world import load_world
@@ -200,10 +201,11 @@ def verify_command(
         raise AeroexecError(f"--statistics prints text or json, not {fmt}")
     settings = project()
     configured = settings.verify or NO_VERIFY
+    # The project's paths are shown relative to the working directory, as given ones are.
     if not catalogs and not mission:
-        mission = list(configured.missions)
+        mission = [shown_path(m) for m in configured.missions]
     if not catalogs:
-        catalogs = list(configured.catalogs)
+        catalogs = [shown_path(c) for c in configured.catalogs]
     if not catalogs and settings.catalog is not None:
         catalogs = [str(settings.catalog)]
     if not catalogs:
