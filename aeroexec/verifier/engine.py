@@ -259,9 +259,10 @@ def filter_report(
         comments = Suppressions()
         kept = tuple(f for f in findings if not comments.suppressed(f.file, f.line, f.rule))
         suppressed = len(findings) - len(kept)
-        findings = kept
-    if findings is report.findings:
-        return report
+        if suppressed:
+            findings = kept
+    if len(findings) == len(report.findings):
+        return report  # nothing left out: no second sort of every finding
     return Report(
         findings,
         report.catalogs,
