@@ -242,3 +242,53 @@ def test_fix_indents_a_misindented_parameter_key_byte_for_byte(project: Path) ->
     )
     assert expected != source
     assert catalog.read_bytes() == expected
+
+
+PREEMPTOR = """\
+behavior_descriptors:
+  - behavior: DOCK
+    timeout: 10
+    incompatible_lists: [motion]
+  - behavior: PARK
+    timeout: 10
+    incompatible_lists: [motion]
+  - behavior: GO_TO
+    timeout: 10
+    incompatible_lists: [motion]
+  - behavior: SPIN
+    timeout: 10
+    incompatible_lists: [motion]
+behavior_lists:
+  - list: motion
+    behaviors: [GO_TO, SPIN]  # the movers
+capability_descriptors: []
+"""
+
+
+@pytest.mark.parametrize(
+    ("members", "fixed"),
+    [
+        (
+            "    behaviors: [GO_TO, SPIN]  # the movers\n",
+            "    behaviors: [GO_TO, SPIN, DOCK, PARK]  # the movers\n",
+        ),
+        (
+            "    behaviors:\n      - GO_TO\n      - SPIN\n",
+            "    behaviors:\n      - GO_TO\n      - SPIN\n      - DOCK\n      - PARK\n",
+        ),
+    ],
+    ids=["flow", "block"],
+)
+def test_fix_adds_a_one_sided_preemptor_to_its_list(
+    project: Path, members: str, fixed: str
+) -> None:
+    # DOCK and PARK preempt the movers through `motion`, which they are not in; every
+    # mover names `motion`: joining it makes the preemption mutual. The two fixes touch
+    # the same line: --fix applies the second in a second pass.
+    source = PREEMPTOR.replace("    behaviors: [GO_TO, SPIN]  # the movers\n", members)
+    catalog = project / "movers.yaml"
+    catalog.write_text(source)
+    result = runner.invoke(app, ["verify", "movers.yaml", "--fix"])
+    assert "AX401" not in result.output, result.output
+    assert "2 fixes applied in 1 file" in result.output
+    assert catalog.read_text() == source.replace(members, fixed)

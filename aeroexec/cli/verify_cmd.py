@@ -232,14 +232,24 @@ def verify_command(
             typer.echo("".join(unified_diff(f, *change) for f, change in changes.items()), nl=False)
             say(
                 "note",
-                f"{_plural(len(fixes), 'fix')} in {_plural(len(changes), 'file')} would apply",
+                f"{_plural(len(fixes), 'fix')} in {_plural(len(changes), 'file')} would apply "
+                "(--fix applies them, and the fixes they make possible)",
             )
             raise typer.Exit(1 if changes else 0)
-        for file, (_, after) in changes.items():
-            write_fixed(Path(file), after)
-        if changes:
+        applied, touched = 0, set()
+        # As ruff does: fixes of the same lines wait for the next pass.
+        for _ in range(FIX_PASSES):
+            if not changes:
+                break
+            for file, (_, after) in changes.items():
+                write_fixed(Path(file), after)
+            applied += len(fixes)
+            touched.update(changes)
             report = run()
-            say("note", f"{_plural(len(fixes), 'fix')} applied in {_plural(len(changes), 'file')}")
+            fixes = fixes_for(report.findings)
+            changes = fixed_files(fixes)
+        if applied:
+            say("note", f"{_plural(applied, 'fix')} applied in {_plural(len(touched), 'file')}")
     shown = report.at_least(threshold)
     styled = use_color(color)
     if statistics:
@@ -251,6 +261,10 @@ def verify_command(
         error_line(str(error))
     # The exit code counts every finding, shown or not, and every unreadable input.
     raise typer.Exit(report.exit_code(strict))
+
+
+#: Passes of --fix at most (a pass applies the fixes that touch distinct lines).
+FIX_PASSES = 10
 
 
 def _plural(count: int, word: str) -> str:

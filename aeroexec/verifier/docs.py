@@ -86,7 +86,10 @@ says so).
   offered only where it is unambiguous: AX803 (a parameter key indented as a task key,
   right after a `- parameter:` entry without one, is indented under it) and AX401 (a
   behavior preempted one-sidedly that has no `incompatible_lists` gets the one list
-  that holds every behavior preempting it). A fix replaces whole lines and leaves every
+  that holds every behavior preempting it; a behavior preempting through one list it
+  names but is not in joins that list, when everything it preempts names it too).
+  Fixes of the same lines wait for the next pass (at most 10, as ruff does); `--diff`
+  shows the first. A fix replaces whole lines and leaves every
   other byte of the file as it was (line endings, a missing final newline, the file's
   mode); the file is replaced whole or not at all.
 - **Call paths.** A mission finding inside a helper function carries the calls that

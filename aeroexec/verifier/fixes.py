@@ -7,7 +7,10 @@ A fix is offered only where it is unambiguous:
   after a `- parameter:` entry that has none: its lines are indented under that entry;
 * AX401 — a behavior preempted one-sidedly that declares no `incompatible_lists` of its
   own, when exactly one behavior list holds every behavior preempting it: the behavior
-  gets `incompatible_lists: [THAT_LIST]`, which makes the preemption mutual.
+  gets `incompatible_lists: [THAT_LIST]`, which makes the preemption mutual; and a
+  behavior that preempts through one list it names but is not in, when every behavior
+  it preempts names that list too: it joins the list (a flow list `[A, B]` gets `, C`
+  before its bracket, a block list one more `- C` line).
 
 The text is read as bytes and decoded as UTF-8; lines are cut at `\\n` only (a `\\r\\n`
 stays in its line), and a file with other line breaks, tabs in the indentation it would
@@ -120,8 +123,10 @@ def _misindented_key(finding: Finding, lines: Sequence[str]) -> Fix | None:
 
 
 def _one_sided(finding: Finding, lines: Sequence[str], catalog: Catalog) -> Fix | None:
-    if " is preempted by " not in finding.message or len(finding.subjects) < 2:
-        return None  # the other form (one behavior preempting many) has several fixes
+    if len(finding.subjects) < 2:
+        return None
+    if " is preempted by " not in finding.message:
+        return _one_sided_preemptor(finding, lines, catalog)
     victim, *preemptors = finding.subjects
     descriptor = catalog.behaviors.get(victim)
     if descriptor is None or "incompatible_lists" in descriptor.marks:
@@ -156,6 +161,57 @@ def _one_sided(finding: Finding, lines: Sequence[str], catalog: Catalog) -> Fix 
         finding.rule,
         finding.line,
         f"add 'incompatible_lists: [{holding[0]}]' to {victim}",
+        (edit,),
+    )
+
+
+def _one_sided_preemptor(finding: Finding, lines: Sequence[str], catalog: Catalog) -> Fix | None:
+    """A preempts its victims through one list L it names but is not in, and every
+    victim names L too: A joins L, and they preempt it back."""
+    preemptor, *victims = finding.subjects
+    descriptor = catalog.behaviors.get(preemptor)
+    if descriptor is None:
+        return None
+    through = [
+        name
+        for name in descriptor.incompatible_lists
+        if name in catalog.lists and set(victims) <= set(catalog.lists[name].behaviors)
+    ]
+    if len(through) != 1:
+        return None
+    chosen = catalog.lists[through[0]]
+    if preemptor in chosen.behaviors or not chosen.behaviors:
+        return None
+    if any(through[0] not in catalog.behaviors[v].incompatible_lists for v in victims):
+        return None  # joining L would not make every victim preempt it back
+    last_mark = chosen.marks.get(f"behaviors.{len(chosen.behaviors) - 1}")
+    if last_mark is None or not (0 < last_mark.line <= len(lines)):
+        return None
+    line = lines[last_mark.line - 1]
+    body = line.rstrip("\r\n")
+    ending = line[len(body) :]
+    last = chosen.behaviors[-1]
+    item = re.match(rf"^( *)-( +)['\"]?{re.escape(last)}['\"]?\s*(#.*)?$", body)
+    if item is not None:  # a block list: one more item line, indented as the last
+        added = f"{item[1]}-{item[2]}{preemptor}{ending or _ending(lines, 0)}"
+        text = line + added if ending else line + _ending(lines, 0) + added.rstrip("\r\n")
+        edit = Edit(last_mark.line, last_mark.line, text)
+    else:  # a flow list `[A, B]`: the name before its closing bracket
+        start = last_mark.column - 1 + len(last)
+        close = body.find("]", start)
+        comment = body.find("#", start)
+        if close < 0 or (0 <= comment < close) or "[" not in body[:start]:
+            return None
+        edit = Edit(
+            last_mark.line,
+            last_mark.line,
+            body[:close].rstrip(" ") + f", {preemptor}" + body[close:] + ending,
+        )
+    return Fix(
+        finding.file,
+        finding.rule,
+        finding.line,
+        f"add {preemptor} to the list {chosen.name}",
         (edit,),
     )
 
