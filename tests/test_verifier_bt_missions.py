@@ -141,3 +141,27 @@ def test_a_witness_the_model_does_not_give_is_marked() -> None:
     take_off = (Step("TAKE_OFF", service="start_task"),)
     assert replays(model, Witness(take_off, Outcome.ALL_ACTIVE))
     assert not replays(model, Witness(take_off, Outcome.REJECTED))
+
+
+@pytest.mark.parametrize(
+    ("text", "error"),
+    [
+        ("nodes: 5\n", "1:8: error: 'nodes' must be a list of nodes"),
+        (
+            "nodes:\n  - node: 1\n    parent: 2\n  - node: 2\n    parent: 1\n",
+            "2:5: error: node 1: its parents form a cycle",
+        ),
+        ("nodes:\n  - node: x\n", "2:5: error: a node needs 'node' (an integer)"),
+        ("nodes:\n  - node: 1\n    parent: 7\n", "2:5: error: node 1: no parent node 7"),
+        (
+            "nodes:\n  - node: 1\n    parent: 0\n  - node: 1\n    parent: 0\n",
+            "4:5: error: node 1 is defined twice",
+        ),
+    ],
+)
+def test_a_malformed_tree_is_one_line_and_exit_2(tmp_path: Path, text: str, error: str) -> None:
+    mission = tmp_path / "bad.yaml"
+    mission.write_text(text)
+    result = runner.invoke(app, ["verify", str(CATALOG), "-m", str(mission)])
+    assert result.exit_code == 2
+    assert f"{mission}:{error}" in result.output
