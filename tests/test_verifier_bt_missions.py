@@ -104,10 +104,30 @@ def test_a_start_the_coordinator_rejects(tmp_path: Path) -> None:
     assert "GIMBAL" in rejected[0]["message"]
 
 
-def test_a_tree_mission_without_a_task_catalog_is_an_input_error() -> None:
-    result = runner.invoke(app, ["verify", "catalog/default.yaml", "-m", str(TELLO)])
-    assert result.exit_code == 2
-    assert "a behavior-tree mission starts tasks: give a task catalog" in result.output
+def test_against_a_behavior_catalog_a_tree_gets_the_abstract_run_of_python_missions(
+    tmp_path: Path,
+) -> None:
+    from aeroexec.catalog import DEFAULT_CATALOG
+
+    tree = BT / "behavior_tree.yaml"
+    assert about(findings(DEFAULT_CATALOG, missions=(tree,)), tree) == []
+    # Not waiting for TAKE_OFF: GO_TO_POINT preempts it in the executive before the
+    # vehicle flies, and is rejected — what the Python mission would get.
+    hurried = tmp_path / "hurried.yaml"
+    hurried.write_text(
+        tree.read_text().replace(
+            "task: TAKE_OFF\n    wait_for_completion: true",
+            "task: TAKE_OFF\n    wait_for_completion: false",
+        )
+    )
+    found = [(r, line, s) for r, line, s in about(findings(DEFAULT_CATALOG, hurried), hurried)]
+    assert ("AX711", 19, ("GO_TO_POINT",)) in found
+    message = next(
+        f["message"]
+        for f in findings(DEFAULT_CATALOG, hurried)
+        if f["rule"] == "AX711" and f["line"] == 19
+    )
+    assert "12: activate TAKE_OFF; 19: execute GO_TO_POINT" in message
 
 
 # -- witnesses of task catalogs (issue 30, point 6) -----------------------------------------

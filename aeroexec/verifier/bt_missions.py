@@ -20,6 +20,13 @@ state. The sequence checks:
 * AX716 a task started without waiting for it is stopped by a later node's task (a
   mutually exclusive one) before it could end;
 * AX717 the coordinator rejects a node's `start_task` in the state the tree leaves.
+
+Against a behavior catalog (the 2017/2.x generation, whose behaviors the executive
+runs), the tree becomes the flow a Python mission folds to (`as_folded`): a node
+waited for is `execute_behavior`, one not waited for `activate_behavior`, a sequence
+runs in order and any other control node is a branch of its children. It is then
+checked exactly as a Python mission is, call by call and by the abstract run in the
+executive (AX701-AX715).
 """
 
 from __future__ import annotations
@@ -34,11 +41,20 @@ from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import AeroexecError, CatalogError, Mark, MissionError
 from aeroexec.inputs import read_text
 from aeroexec.verifier.findings import Finding, PathStep
+from aeroexec.verifier.mission_fold import (
+    Branch,
+    CallArgument,
+    CallNode,
+    Flow,
+    FoldedMission,
+    MissionCall,
+)
 from aeroexec.verifier.missions import (
     BAD_VALUE,
     UNKNOWN_ARGUMENT,
     UNKNOWN_BEHAVIOR,
     WRONG_DIMENSIONS,
+    MissionScript,
 )
 from aeroexec.verifier.registry import mission_rule
 from aeroexec.verifier.suggest import Suggester
@@ -211,6 +227,49 @@ def _refuse_cycles(nodes: dict[int, BtNode]) -> None:
                 raise MissionError(f"{node.shown}: its parents form a cycle", node.mark)
             seen.add(parent)
             parent = nodes[parent].parent
+
+
+# -- as a Python mission folds (behavior catalogs) --------------------------------------------
+def as_folded(mission: BtMission) -> MissionScript:
+    """The tree as the flow of mission calls a Python mission folds to."""
+    calls: list[MissionCall] = []
+
+    def flow_of(node: BtNode) -> Flow:
+        if node.kind == "execution":
+            if node.task is None:
+                return ()
+            kind = "execute" if node.wait else "activate"
+            arguments = tuple(
+                CallArgument(str(name), _as_argument(value), node.parameters_mark)
+                for name, value in (node.parameters or {}).items()
+            )
+            call = MissionCall(
+                kind,
+                f"{kind}_behavior",
+                node.task,
+                arguments,
+                (),
+                node.task_mark,
+                node.task_mark,
+            )
+            calls.append(call)
+            return (CallNode(call),)
+        parts = [flow_of(child) for child in node.children]
+        if node.subtype in ("sequence", "parallel", "") or len(parts) <= 1:
+            return tuple(n for part in parts for n in part)
+        arms = tuple(
+            (f"node {c.number}", part) for c, part in zip(node.children, parts, strict=True)
+        )
+        return (Branch(node.mark, arms),)
+
+    flow = tuple(n for root in mission.roots for n in flow_of(root))
+    return MissionScript(mission.path, FoldedMission(flow, "behavior tree", tuple(calls)))
+
+
+def _as_argument(value: Any) -> Any:
+    if isinstance(value, list):
+        return [_as_argument(v) for v in value]
+    return value if isinstance(value, (str, int, float, bool)) or value is None else str(value)
 
 
 # -- checking ---------------------------------------------------------------------------

@@ -66,8 +66,11 @@ says so).
 - **What is checked.** `aeroexec verify CATALOG... -m MISSION...`; without either, the
   `catalogs` and `missions` of `[tool.aeroexec.verify]` in the nearest `pyproject.toml`
   (or `aeroexec.toml`), else its `catalog`. Missions are Python scripts (`.py`) or
-  Aerostack behavior-tree missions (`.yaml`, `nodes:`), the latter checked against the
-  task catalogs; a behavior-tree file given as a CATALOG is recognized as a mission.
+  Aerostack behavior-tree missions (`.yaml`, `nodes:`): against a task catalog on the
+  task coordinator's model (AX716, AX717), against a behavior catalog as the flow a
+  Python mission folds to (a node waited for is `execute_behavior`, one not waited for
+  `activate_behavior`), run in the executive. A behavior-tree file given as a CATALOG is
+  recognized as a mission.
 - **Which rules.** `--select`, `--extend-select` and `--ignore` take codes or prefixes
   (`AX7`, `AX71`, `AX711`, `ALL`), comma-separated or repeated. The project's `select`,
   `extend-select` and `ignore` are applied first, then the command line's: a `select`

@@ -301,24 +301,22 @@ def _verify(
         note = f" [catalog {catalog.source}]" if len(behavior_catalogs) > 1 else ""
         for script in scripts:
             findings.extend(check_mission(script, catalog, note, library=library, world=world))
-    # Behavior-tree missions start tasks: they are checked against the task catalogs.
+    # Behavior-tree missions: against task catalogs on the coordinator's model, against
+    # behavior catalogs as the Python missions are (their flow, run in the executive).
     if trees:
-        from aeroexec.verifier.bt_missions import check_bt_mission
+        from aeroexec.verifier.bt_missions import as_folded, check_bt_mission
+        from aeroexec.verifier.missions import check_mission
 
         task_catalogs = [c for c in loaded if isinstance(c, TaskCatalog)]
-        if not task_catalogs:
-            errors.extend(
-                InputError(
-                    "a behavior-tree mission starts tasks: give a task catalog (Aerostack "
-                    "4.x, 'tasks:') to check it against",
-                    tree.path,
-                )
-                for tree in trees
-            )
         for catalog in task_catalogs:
-            note = f" [catalog {catalog.source}]" if len(task_catalogs) > 1 else ""
+            note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
             for tree in trees:
                 findings.extend(check_bt_mission(tree, catalog, note))
+        folded = [as_folded(tree) for tree in trees]
+        for catalog in behavior_catalogs:
+            note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
+            for script in folded:
+                findings.extend(check_mission(script, catalog, note, library=library, world=world))
     return Report(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),
