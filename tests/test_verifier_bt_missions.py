@@ -185,3 +185,16 @@ def test_a_malformed_tree_is_one_line_and_exit_2(tmp_path: Path, text: str, erro
     result = runner.invoke(app, ["verify", str(CATALOG), "-m", str(mission)])
     assert result.exit_code == 2
     assert f"{mission}:{error}" in result.output
+
+
+def test_a_tree_too_deep_to_follow_is_refused_quickly(tmp_path: Path) -> None:
+    lines = ["nodes:"]
+    for number in range(1, 50_001):  # a chain: walked once, not once per node
+        lines += [f"  - node: {number}", f"    parent: {number - 1}", "    type: control_flow"]
+    mission = tmp_path / "deep.yaml"
+    mission.write_text("\n".join(lines) + "\n")
+    result = runner.invoke(app, ["verify", str(CATALOG), "-m", str(mission)])
+    assert result.exit_code == 2
+    assert f"{mission}:602:5: error: node 201: the tree is nested deeper than 200 levels" in (
+        result.output
+    )

@@ -218,15 +218,34 @@ def _parameters(given: YNode) -> dict[str, Any] | None:
     return None
 
 
+#: Levels of a tree the checks follow (they recurse); Aerostack's trees have a handful.
+MAX_TREE_DEPTH = 200
+
+
 def _refuse_cycles(nodes: dict[int, BtNode]) -> None:
+    """A `MissionError` for parents that form a cycle or a tree deeper than
+    MAX_TREE_DEPTH; each node is walked once (depths are remembered)."""
+    depth: dict[int, int] = {0: 0}
     for node in nodes.values():
-        seen = {node.number}
-        parent = node.parent
-        while parent != 0 and parent in nodes:
-            if parent in seen:
+        path: list[int] = []
+        on_path: set[int] = set()
+        current = node.number
+        while current not in depth:
+            if current in on_path:
                 raise MissionError(f"{node.shown}: its parents form a cycle", node.mark)
-            seen.add(parent)
-            parent = nodes[parent].parent
+            on_path.add(current)
+            path.append(current)
+            current = nodes[current].parent if current in nodes else 0
+        level = depth[current]
+        for number in reversed(path):
+            level += 1
+            depth[number] = level
+            if level > MAX_TREE_DEPTH:
+                raise MissionError(
+                    f"{nodes[number].shown}: the tree is nested deeper than "
+                    f"{MAX_TREE_DEPTH} levels",
+                    nodes[number].mark,
+                )
 
 
 # -- as a Python mission folds (behavior catalogs) --------------------------------------------
