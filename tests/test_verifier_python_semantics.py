@@ -264,3 +264,23 @@ def test_a_while_loop_on_a_counter_runs_exactly_its_iterations() -> None:
     )
     assert [f.line for f in looping] == [6]
     assert "loop #2" in looping[0].message
+
+
+def test_nested_constant_loops_unroll_within_a_budget_and_say_so() -> None:
+    # 64 x 64 x 64 iterations would be 262,144 calls to fold: beyond the budget the inner
+    # loops stay loops, and AX715 names them.
+    found = findings(
+        """\
+        from executive_engine_api import execute_behavior
+
+        def runMission():
+            execute_behavior('TAKE_OFF')
+            for a in range(64):
+                for b in range(64):
+                    for c in range(64):
+                        execute_behavior('ROTATE', angle=c)
+        """
+    )
+    [bounded] = [f for f in found if f.rule == "AX715"]
+    assert "the loop at line 7 left as a loop (1000 iterations unrolled)" in bounded.message
+    assert [f for f in found if f.severity.value == "error"] == []

@@ -59,6 +59,9 @@ MAX_NESTING = 60  # blocks and inlined helpers, together
 MAX_INLINE = 8  # helper calls inside helper calls
 MAX_EXPRESSION = 40  # depth of an expression the folder evaluates
 MAX_UNROLL = 64  # items of a literal sequence a `for` is unrolled over
+#: Iterations unrolled in one mission, all loops together: nested constant loops
+#: (`range(64)` in `range(64)` in ...) stay loops beyond it (AX715 says so).
+MAX_UNROLLED = 1_000
 #: Methods that read a list or dict without changing it; any other method called on a
 #: name makes the folder forget what the name holds.
 _READING_METHODS = frozenset({"get", "keys", "values", "items", "copy", "index", "count"})
@@ -203,6 +206,8 @@ class FoldedMission:
     calls: tuple[MissionCall, ...]
     #: API call sites whose behavior name could not be folded (by place).
     unchecked: tuple[Mark, ...] = field(default=())
+    #: Bounds the folding reached (constant loops left as loops), for AX715.
+    bounds: tuple[str, ...] = field(default=())
 
 
 # -- folding --------------------------------------------------------------------------------
@@ -363,6 +368,9 @@ class Folder:
         #: `with` bodies waiting for the `yield` of their `@contextmanager` helper:
         #: (statements, the caller's environment, how many helpers are inlined while
         #: the helper's own body runs), innermost last.
+        #: Iterations unrolled so far, and the loops left as loops for the budget.
+        self.unrolled = 0
+        self.bounds: list[str] = []
         self.with_bodies: list[
             tuple[Sequence[ast.stmt], dict[str, Any], int, list[tuple[str, Mark]]]
         ] = []
@@ -390,6 +398,7 @@ class Folder:
             entry,
             tuple(self.calls),
             tuple(sorted(self.unchecked.values(), key=lambda m: (m.line, m.column))),
+            tuple(dict.fromkeys(self.bounds)),
         )
 
     # -- statements ----------------------------------------------------------------------
@@ -638,7 +647,13 @@ class Folder:
         if isinstance(items, dict):
             items = list(items)  # a dict iterates over its keys
         constant = isinstance(items, (list, tuple, str)) and is_known(items)
-        if constant and len(items) <= MAX_UNROLL and not isinstance(node, ast.AsyncFor):
+        if constant and self.unrolled + len(items) > MAX_UNROLLED:
+            self.bounds.append(
+                f"the loop at line {node.lineno} left as a loop ({MAX_UNROLLED} iterations "
+                "unrolled)"
+            )
+        elif constant and len(items) <= MAX_UNROLL and not isinstance(node, ast.AsyncFor):
+            self.unrolled += len(items)
             if not _jumps_out(node.body):
                 for item in items:
                     self.bind(node.target, item, env)
@@ -713,12 +728,14 @@ class Folder:
         broke = False
         while True:
             tested, condition = self.evaluate_with_calls(node.test, trial)
-            if tested or not is_known(condition) or len(iterations) >= MAX_UNROLL:
+            budget = len(iterations) >= MAX_UNROLL or self.unrolled >= MAX_UNROLLED
+            if tested or not is_known(condition) or budget:
                 del self.calls[calls:]
                 self.unchecked = unchecked
                 return None
             if not condition:
                 break
+            self.unrolled += 1
             flow = self.block(node.body, trial)
             iterations.append(flow)
             if flow and isinstance(flow[-1], Jump) and flow[-1].kind != "continue":
@@ -1031,4 +1048,5 @@ def fold_mission(tree: ast.Module, file: str, lines: Sequence[str]) -> FoldedMis
         folded.entry,
         tuple(calls),
         tuple(sorted(folder.unchecked.values(), key=lambda m: (m.line, m.column))),
+        folded.bounds,
     )

@@ -134,7 +134,8 @@ BOUNDED = mission_rule(
     "mission-analysis-bounded",
     INFO,
     """The abstract run of a mission reached one of its bounds (distinct states at one
-    point, loop iterations, calls sent), so some paths were not followed to the end. In
+    point, loop iterations, calls sent, constant loops unrolled: nested ones beyond 1,000
+    iterations in all stay loops), so some paths were not followed to the end. In
     flight: nothing; the sequence checks (AX709-AX714) are complete only up to the bound.
     Fix: nothing needed; a smaller mission function, or fewer undecidable branches,
     lets the verifier follow every path.""",
@@ -278,6 +279,7 @@ class MissionRun:
     # -- running -------------------------------------------------------------------------
     def run(self, mission: FoldedMission, file: str) -> list[Finding]:
         self.file = file
+        self.bounds_hit.extend(mission.bounds)
         start = _State(position=self.world.start)
         ends = self.explore(mission.flow, [start])
         for state in [*ends.normal, *ends.returns, *ends.breaks, *ends.continues]:
