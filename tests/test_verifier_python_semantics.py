@@ -284,3 +284,33 @@ def test_nested_constant_loops_unroll_within_a_budget_and_say_so() -> None:
     [bounded] = [f for f in found if f.rule == "AX715"]
     assert "the loop at line 7 left as a loop (1000 iterations unrolled)" in bounded.message
     assert [f for f in found if f.severity.value == "error"] == []
+
+
+def test_a_return_inside_a_with_body_runs_the_helpers_finally_then_leaves() -> None:
+    found = findings(
+        """\
+        from contextlib import contextmanager
+
+        from executive_engine_api import execute_behavior
+
+        @contextmanager
+        def airborne():
+            execute_behavior('TAKE_OFF')
+            try:
+                yield
+            finally:
+                execute_behavior('LAND')
+
+        def runMission():
+            for leg in range(2):
+                with airborne():
+                    execute_behavior('GO_TO_POINT', coordinates=[leg, 1, 1])
+                    if leg == 0:
+                        continue
+                    return
+            execute_behavior('LAND')
+        """
+    )
+    # Each leg takes off and lands again (the finally on `continue` and on `return`);
+    # the LAND after the loop is never reached, so it is not a landing while landed.
+    assert [f for f in found if f.severity.value != "info"] == []

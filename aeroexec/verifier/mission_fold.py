@@ -183,6 +183,10 @@ class Inline:
     name: str
     mark: Mark
     body: Flow
+    #: A `@contextmanager` helper around a `with` body: a `return`, `break` or
+    #: `continue` of the body leaves the caller (after the helper's `finally`), not
+    #: just the helper.
+    passthrough: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -493,7 +497,7 @@ class Folder:
             return
         item, rest = items[0], items[1:]
         manager = self.context_manager(item.context_expr, env)
-        if manager is not None and item.optional_vars is None and not _jumps_out(body):
+        if manager is not None and item.optional_vars is None:
             function, call = manager
             args = [self.evaluate(a, env, [], 0) for a in call.args]
             keywords = {k.arg: self.evaluate(k.value, env, [], 0) for k in call.keywords}
@@ -510,7 +514,7 @@ class Folder:
                 self.via.pop()
             if len(self.with_bodies) >= depth:  # the helper never reached its yield
                 del self.with_bodies[depth - 1 :]
-            yield Inline(function.node.name, self.mark(call), flow)
+            yield Inline(function.node.name, self.mark(call), flow, passthrough=True)
             return
         yield from self.expression_calls(item.context_expr, env)
         if item.optional_vars is not None:

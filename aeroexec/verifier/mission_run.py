@@ -333,6 +333,12 @@ class MissionRun:
                 current = self.unrolled(node, current, ends)
             elif isinstance(node, Try):
                 current = self.try_block(node, current, ends)
+            elif isinstance(node, Inline) and node.passthrough:
+                sub = self.explore(node.body, current)
+                ends.returns.extend(sub.returns)
+                ends.breaks.extend(sub.breaks)
+                ends.continues.extend(sub.continues)
+                current = self.merge(sub.normal, f"line {node.mark.line}")
             elif isinstance(node, Inline):
                 sub = self.explore(node.body, current)
                 # A helper's return comes back here; a raise ends the mission.
