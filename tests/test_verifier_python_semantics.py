@@ -303,7 +303,7 @@ def test_a_return_inside_a_with_body_runs_the_helpers_finally_then_leaves() -> N
 
         def runMission():
             for leg in range(2):
-                with airborne():
+                with airborne() as flight:
                     execute_behavior('GO_TO_POINT', coordinates=[leg, 1, 1])
                     if leg == 0:
                         continue

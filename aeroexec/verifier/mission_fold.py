@@ -497,8 +497,10 @@ class Folder:
             return
         item, rest = items[0], items[1:]
         manager = self.context_manager(item.context_expr, env)
-        if manager is not None and item.optional_vars is None:
+        if manager is not None:
             function, call = manager
+            if item.optional_vars is not None:  # what the helper yields: not folded
+                self.bind(item.optional_vars, UNKNOWN, env)
             args = [self.evaluate(a, env, [], 0) for a in call.args]
             keywords = {k.arg: self.evaluate(k.value, env, [], 0) for k in call.keywords}
             inner = [ast.With(items=list(rest), body=list(body))] if rest else list(body)
