@@ -14,6 +14,14 @@ same answer from any subdirectory of the project.
     connect = "udpin:127.0.0.1:14551"                  # fly
     disable_plugins = ["dronetricks"]                  # installed plugins not to load
 
+    [tool.aeroexec.verify]                             # verify, as ruff's [tool.ruff.lint]
+    catalogs = ["catalog/*.yaml"]                      # what a bare `aeroexec verify` checks
+    missions = ["missions/*.py"]
+    select = ["AX"]                                    # codes or prefixes
+    extend-select = []
+    ignore = ["AX708"]
+    per-file-ignores = {"missions/legacy_*.py" = ["AX7"]}
+
 An option on the command line wins over the file; the file wins over aeroexec's own
 defaults. A malformed file is a `ConfigError` naming the file and line.
 """
@@ -49,6 +57,7 @@ class ProjectConfig:
     connect: str | None = None
     #: Installed plugins (distribution names) whose entry points are not loaded.
     disable_plugins: tuple[str, ...] | None = None
+    verify: VerifyConfig | None = None
 
     @property
     def root(self) -> Path:
@@ -65,6 +74,23 @@ class ProjectConfig:
 
 
 NO_CONFIG = ProjectConfig()
+
+
+@dataclass(frozen=True, slots=True)
+class VerifyConfig:
+    """`[tool.aeroexec.verify]`: what `aeroexec verify` checks and reports."""
+
+    #: Catalog paths or glob patterns, resolved against the configuration's directory.
+    catalogs: tuple[str, ...] = ()
+    missions: tuple[str, ...] = ()
+    select: tuple[str, ...] | None = None
+    extend_select: tuple[str, ...] = ()
+    ignore: tuple[str, ...] = ()
+    #: glob pattern (relative to the configuration's directory) -> codes or prefixes.
+    per_file_ignores: tuple[tuple[str, tuple[str, ...]], ...] = ()
+
+
+NO_VERIFY = VerifyConfig()
 
 
 def find_config(start: str | Path | None = None) -> tuple[Path, dict[str, Any]] | None:
@@ -146,6 +172,22 @@ def _names(value: Any) -> Any:
     return _WRONG
 
 
+def _names_or_empty(value: Any) -> Any:
+    return () if value == [] else _names(value)
+
+
+def _code_table(value: Any) -> Any:
+    if not isinstance(value, dict):
+        return _WRONG
+    entries = []
+    for pattern, codes in value.items():
+        checked = _names_or_empty(codes)
+        if checked is _WRONG:
+            return _WRONG
+        entries.append((pattern, checked))
+    return tuple(entries)
+
+
 def _integer(value: Any) -> Any:
     return value if isinstance(value, int) and not isinstance(value, bool) else _WRONG
 
@@ -160,6 +202,16 @@ _KEYS: Mapping[str, tuple[Callable[[Any], Any], str]] = {
     "seed": (_integer, "an integer"),
     "connect": (_nonempty, "a MAVLink endpoint (text), e.g. udpin:127.0.0.1:14550"),
     "disable_plugins": (_names, "a list of installed plugins' distribution names"),
+    "verify": (lambda v: v if isinstance(v, dict) else _WRONG, "a table ([tool.aeroexec.verify])"),
+}
+
+_VERIFY_KEYS: Mapping[str, tuple[Callable[[Any], Any], str]] = {
+    "catalogs": (_names_or_empty, "a list of catalog paths or glob patterns"),
+    "missions": (_names_or_empty, "a list of mission paths or glob patterns"),
+    "select": (_names_or_empty, "a list of rule codes or prefixes"),
+    "extend-select": (_names_or_empty, "a list of rule codes or prefixes"),
+    "ignore": (_names_or_empty, "a list of rule codes or prefixes"),
+    "per-file-ignores": (_code_table, "a table of glob pattern = [codes or prefixes]"),
 }
 
 
@@ -179,6 +231,8 @@ def _parse(path: Path, table: dict[str, Any]) -> ProjectConfig:
         if checked is _WRONG:
             raise ConfigError(f"'{key}' must be {wanted}", key_mark(path, key))
         values[key] = checked
+    if "verify" in values:
+        values["verify"] = _parse_verify(path, values["verify"])
     root = path.parent
     return ProjectConfig(
         path=path,
@@ -188,6 +242,32 @@ def _parse(path: Path, table: dict[str, Any]) -> ProjectConfig:
         seed=values.get("seed"),
         connect=values.get("connect"),
         disable_plugins=values.get("disable_plugins"),
+        verify=values.get("verify"),
+    )
+
+
+def _parse_verify(path: Path, table: dict[str, Any]) -> VerifyConfig:
+    values: dict[str, Any] = {}
+    for key, value in table.items():
+        known = _VERIFY_KEYS.get(key.replace("_", "-"))
+        if known is None:
+            raise ConfigError(
+                f"unknown key 'verify.{key}' (keys: {', '.join(_VERIFY_KEYS)})",
+                key_mark(path, key, "verify"),
+            )
+        check, wanted = known
+        checked = check(value)
+        if checked is _WRONG:
+            raise ConfigError(f"'verify.{key}' must be {wanted}", key_mark(path, key, "verify"))
+        values[key.replace("_", "-")] = checked
+    root = path.parent
+    return VerifyConfig(
+        catalogs=tuple(str(_resolve(root, c)) for c in values.get("catalogs", ())),
+        missions=tuple(str(_resolve(root, m)) for m in values.get("missions", ())),
+        select=values.get("select"),
+        extend_select=values.get("extend-select", ()),
+        ignore=values.get("ignore", ()),
+        per_file_ignores=values.get("per-file-ignores", ()),
     )
 
 
@@ -207,16 +287,20 @@ def _did_you_mean(key: str) -> str:
     return f" (keys: {', '.join(_KEYS)})"
 
 
-def key_mark(path: Path, key: str | None) -> Mark:
-    """Where `key` is set in the aeroexec table (tomllib keeps no positions, so the text
-    is searched: the table's header, then the key's line inside it)."""
+def key_mark(path: Path, key: str | None, table: str = "") -> Mark:
+    """Where `key` is set in the aeroexec table, or in its subtable `table` (tomllib
+    keeps no positions, so the text is searched: the table's header, then the key's
+    line inside it)."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
     except (OSError, UnicodeDecodeError):
         return Mark(shown(path))
     start = 0
-    if path.name == PYPROJECT:
-        header = re.compile(r"^\s*\[\s*tool\s*\.\s*aeroexec\s*\]")
+    if path.name == PYPROJECT or table:
+        name = r"tool\s*\.\s*aeroexec" if path.name == PYPROJECT else ""
+        if table:
+            name = rf"{name}\s*\.\s*{table}" if name else table
+        header = re.compile(rf"^\s*\[\s*{name}\s*\]")
         start = next((i for i, line in enumerate(lines) if header.match(line)), -1)
         if start < 0:
             return Mark(shown(path))

@@ -143,7 +143,18 @@ def test_json_shape() -> None:
     assert set(document) == {"findings", "summary", "inputErrors"}
     assert document["inputErrors"] == []
     assert set(document["summary"]) == {"errors", "warnings", "infos"}
-    keys = {"rule", "severity", "message", "file", "line", "column", "subjects", "witness", "path"}
+    keys = {
+        "rule",
+        "severity",
+        "message",
+        "file",
+        "line",
+        "column",
+        "subjects",
+        "witness",
+        "path",
+        "related",
+    }
     for finding in document["findings"]:
         assert set(finding) == keys
         assert finding["severity"] in ("error", "warning", "info")

@@ -15,9 +15,11 @@ from aeroexec.catalog import read_catalog
 from aeroexec.catalog.formats import read_any_catalog
 from aeroexec.catalog.model import Severity
 from aeroexec.catalog.paths import DEFAULT_CATALOG
+from aeroexec.catalog.tasks import TaskCatalog
 from aeroexec.plugins import BehaviorSet, BehaviorSources, discover
 from aeroexec.properties.spec import load_properties
 from aeroexec.verifier import Finding, Rule, all_rules, check_mission
+from aeroexec.verifier.bt_missions import check_bt_mission, read_bt_mission
 from aeroexec.verifier.engine import check_any_catalog
 from aeroexec.verifier.missions import read_mission
 from aeroexec.verifier.signals import SignalUse, check_signal_uses
@@ -27,6 +29,8 @@ RULES = FIXTURES / "rules"
 TASKS = FIXTURES / "tasks"
 MISSIONS = FIXTURES / "missions"
 PROPERTIES = FIXTURES / "properties"
+#: Behavior-tree missions (YAML) and their task catalogs (AX716-AX717).
+TREES = FIXTURES / "bt"
 MISSION_CATALOG = MISSIONS / "catalog.yaml"
 CODE_BEHAVIORS = FIXTURES / "code_behaviors.py"
 #: Rules that fire on every catalog (the dialect notes): they have no clean fixture.
@@ -55,7 +59,8 @@ def fixture_for(rule: Rule, clean: bool = False) -> Path:
     if rule.kind == "property":
         return PROPERTIES / f"{rule.code}{'.clean' if clean else ''}.yaml"
     if rule.kind == "mission":
-        return MISSIONS / f"{rule.code}{'.clean' if clean else ''}.py"
+        tree = TREES / f"{rule.code}{'.clean' if clean else ''}.yaml"
+        return tree if tree.exists() else MISSIONS / f"{rule.code}{'.clean' if clean else ''}.py"
     folder = TASKS if rule.code.startswith("AX8") else RULES
     path = folder / f"{rule.code}{'.clean' if clean else ''}.yaml"
     if clean and not path.exists():
@@ -82,6 +87,11 @@ def findings_of(path: Path, rule: Rule | None = None) -> list[Finding]:
         return check_signal_uses(uses, read_catalog(DEFAULT_CATALOG))
     if path.suffix == ".py":
         return check_mission(read_mission(path), read_catalog(mission_catalog(path)))
+    if path.parent == TREES:
+        first = path.read_text(encoding="utf-8").splitlines()[0]
+        catalog = read_any_catalog(TREES / first.removeprefix("# catalog:").strip())
+        assert isinstance(catalog, TaskCatalog)
+        return check_bt_mission(read_bt_mission(str(path)), catalog)
     behaviors = code_behaviors() if rule is not None and rule.kind == "code" else None
     return check_any_catalog(read_any_catalog(path), behaviors=behaviors)
 

@@ -166,7 +166,8 @@ def test_pixhawk_catalog_duplicates_tasks_and_declares_tasks_nobody_performs() -
     assert on_request.subjects == ("SEND_PATH", "FOLLOW_PATH")
     assert on_request.witness is not None
     assert on_request.witness.describe() == (
-        "start task SEND_PATH: the start of SEND_PATH is rejected"
+        "start task SEND_PATH: the start of SEND_PATH is rejected (replayed on the model of "
+        "the 2021 task coordinator; `aeroexec run` runs behavior catalogs only)"
     )
 
 

@@ -13,13 +13,17 @@ from aeroexec.catalog.loader import parse_root, read_catalog_text
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.task_loader import is_task_catalog, read_task_catalog
 from aeroexec.catalog.tasks import TaskCatalog
-from aeroexec.catalog.yamlnodes import load_yaml
+from aeroexec.catalog.yamlnodes import YNode, load_yaml
 
 AnyCatalog = Catalog | TaskCatalog
 
 
 def parse_any_catalog(text: str, file: str = "<string>") -> AnyCatalog:
-    root = load_yaml(text, file)
+    return catalog_from_root(load_yaml(text, file), text, file)
+
+
+def catalog_from_root(root: YNode | None, text: str, file: str) -> AnyCatalog:
+    """The catalog of an already parsed YAML document (either generation)."""
     if root is not None and root.is_map and is_task_catalog(root):
         return read_task_catalog(root, file, text)
     return parse_root(root, text, file)

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import shutil
 from enum import Enum
+from pathlib import Path
 
 import typer
 
 from aeroexec.catalog.model import Severity
-from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.app import app, error_line, guarded, say
 from aeroexec.cli.options import (
     Color,
     apply_timeout,
@@ -29,12 +31,17 @@ from aeroexec.cli.project import (
     project_behaviors,
 )
 from aeroexec.cli.spec import SpecOption
+from aeroexec.config import NO_VERIFY, ProjectConfig
+from aeroexec.display import shown as shown_path
 from aeroexec.errors import AeroexecError
+from aeroexec.outputs import whole_file_or_none
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
-from aeroexec.verifier.findings import InputError
+from aeroexec.verifier.findings import InputError, Report
+from aeroexec.verifier.fixes import fixed_files, fixes_for, unified_diff
 from aeroexec.verifier.registry import all_rules, get, suggest_code
 from aeroexec.verifier.report import render
+from aeroexec.verifier.selection import RuleSelection, SelectionLayer, split_selectors
 from aeroexec.verifier.signals import SignalUse
 
 HELP = """Check behavior catalogs and mission scripts offline, before they fly.
@@ -56,7 +63,14 @@ When the project declares its behaviors (-b/--behaviors, `behaviors` in
 [tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
 catalog is also checked against that code (AX9xx: behaviors without an implementation,
 argument names the code does not read), and witnesses are completed to happen with the
-real behaviors (TAKE_OFF first, arguments). Without CATALOG, the project's catalog.
+real behaviors (TAKE_OFF first, arguments).
+
+Rules are chosen as with ruff: --select, --extend-select and --ignore take codes or
+prefixes (AX7, AX71, AX711; ALL), on top of [tool.aeroexec.verify] in pyproject.toml
+(select, extend-select, ignore, per-file-ignores). A comment on a finding's line
+silences it: `# noqa: AX711` in a mission, `# aeroexec: ignore[AX401]` in a catalog.
+Without CATALOG and --mission, the `catalogs` and `missions` the project lists there
+(else its `catalog`) are checked: a bare `aeroexec verify` checks the whole project.
 
 Property files given with --spec (docs/properties.md) are read and their signals
 checked against each behavior catalog (AX75x: behaviors, capabilities and faults that
@@ -71,6 +85,9 @@ Examples:
   aeroexec verify catalog/default.yaml --format sarif > verify.sarif
   aeroexec verify catalog/default.yaml --spec spec.yaml
   aeroexec verify my-catalog.yaml -b mybehaviors
+  aeroexec verify --select AX7 --ignore AX708 -m 'missions/*.py'
+  aeroexec verify --statistics
+  aeroexec verify --diff        # then --fix
   aeroexec verify --list-rules
   aeroexec verify --explain AX304
 
@@ -99,7 +116,8 @@ def verify_command(
     catalogs: list[str] = typer.Argument(
         None,
         metavar="CATALOG...",
-        help="Catalog files (YAML); glob patterns allowed. Default: the project's catalog.",
+        help="Catalog files (YAML); glob patterns allowed. Default: the catalogs of the "
+        "project's [tool.aeroexec.verify], else its catalog.",
         show_default=False,
     ),
     mission: list[str] = mission_option(
@@ -146,6 +164,46 @@ def verify_command(
         "wall-clock time: an error at its file:line, exit 2. Default: no limit."
     ),
     disable_plugin: DisablePluginOption = None,
+    select: list[str] = typer.Option(
+        None,
+        "--select",
+        metavar="CODE",
+        help="Report only these rules: codes or prefixes (AX7, ALL), comma-separated; "
+        "repeatable; replaces the project's select.",
+        show_default=False,
+    ),
+    extend_select: list[str] = typer.Option(
+        None,
+        "--extend-select",
+        metavar="CODE",
+        help="Report these rules too (codes or prefixes, comma-separated; repeatable).",
+        show_default=False,
+    ),
+    ignore: list[str] = typer.Option(
+        None,
+        "--ignore",
+        metavar="CODE",
+        help="Do not report these rules (codes or prefixes, comma-separated; repeatable); "
+        "the most specific selector wins.",
+        show_default=False,
+    ),
+    statistics: bool = typer.Option(
+        False,
+        "--statistics",
+        help="Print how many findings each rule has (count, code, name) instead of the findings.",
+    ),
+    fix: bool = typer.Option(
+        False,
+        "--fix",
+        help="Apply the mechanical fixes (AX803 misindented keys, AX401 one-sided "
+        "preemption where unambiguous), then report what remains.",
+    ),
+    diff: bool = typer.Option(
+        False,
+        "--diff",
+        help="Print the fixes --fix would apply as a unified diff, change nothing; exit 1 "
+        "when there is one.",
+    ),
 ) -> None:
     if explain is not None:
         rule = get(explain)
@@ -162,27 +220,72 @@ def verify_command(
     else:
         threshold = Severity(min_severity.value)
     apply_timeout(timeout)
+    if statistics and fmt not in ("text", "json"):
+        raise AeroexecError(f"--statistics prints text or json, not {fmt}")
     settings = project()
+    configured = settings.verify or NO_VERIFY
+    # The project's paths are shown relative to the working directory, as given ones are.
+    if not catalogs and not mission:
+        mission = [shown_path(m) for m in configured.missions]
+    if not catalogs:
+        catalogs = [shown_path(c) for c in configured.catalogs]
     if not catalogs and settings.catalog is not None:
         catalogs = [str(settings.catalog)]
     if not catalogs:
         raise AeroexecError("no catalog given (try: aeroexec verify catalog.yaml)")
+    selection = rule_selection(settings, select, extend_select, ignore)
     found = project_behaviors(behaviors, settings, disable_plugin)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
     uses, spec_errors = signal_uses(spec or [])
-    report = verify(
-        catalogs,
-        mission,
-        world=limits,
-        behaviors=found if found.declared else None,
-        signals=uses,
-    )
-    if spec_errors:
-        report = dataclasses.replace(report, input_errors=(*report.input_errors, *spec_errors))
+
+    def run() -> Report:
+        checked = verify(
+            catalogs,
+            mission,
+            world=limits,
+            behaviors=found if found.declared else None,
+            signals=uses,
+            selection=selection,
+        )
+        if spec_errors:
+            checked = dataclasses.replace(
+                checked, input_errors=(*checked.input_errors, *spec_errors)
+            )
+        return checked
+
+    report = run()
+    if fix or diff:
+        fixes = fixes_for(report.findings)
+        changes = fixed_files(fixes)
+        if diff:
+            typer.echo("".join(unified_diff(f, *change) for f, change in changes.items()), nl=False)
+            say(
+                "note",
+                f"{_plural(len(fixes), 'fix')} in {_plural(len(changes), 'file')} would apply "
+                "(--fix applies them, and the fixes they make possible)",
+            )
+            raise typer.Exit(1 if changes else 0)
+        applied, touched = 0, set()
+        # As ruff does: fixes of the same lines wait for the next pass.
+        for _ in range(FIX_PASSES):
+            if not changes:
+                break
+            for file, (_, after) in changes.items():
+                write_fixed(Path(file), after)
+            applied += len(fixes)
+            touched.update(changes)
+            report = run()
+            fixes = fixes_for(report.findings)
+            changes = fixed_files(fixes)
+        if applied:
+            say("note", f"{_plural(applied, 'fix')} applied in {_plural(len(touched), 'file')}")
     shown = report.at_least(threshold)
     styled = use_color(color)
-    text = render(shown, fmt, witness=witness, color=styled)
+    if statistics:
+        text = statistics_listing(shown, fmt)
+    else:
+        text = render(shown, fmt, witness=witness, color=styled)
     typer.echo(text, nl=False, color=styled)
     for error in report.input_errors:
         error_line(str(error))
@@ -209,6 +312,67 @@ def signal_uses(specs: list[str]) -> tuple[list[SignalUse], list[InputError]]:
         for prop in properties.properties:
             uses.extend(SignalUse(name, mark) for name, mark in prop.formula.uses)
     return uses, errors
+
+
+#: Passes of --fix at most (a pass applies the fixes that touch distinct lines).
+FIX_PASSES = 10
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}{'' if count == 1 else 'es' if word.endswith('x') else 's'}"
+
+
+def write_fixed(path: Path, content: bytes) -> None:
+    """Replace a file by its fixed bytes, whole or not at all, keeping its mode."""
+    with whole_file_or_none(path, AeroexecError) as temporary:
+        temporary.write_bytes(content)
+        shutil.copymode(path, temporary)
+
+
+def rule_selection(
+    settings: ProjectConfig,
+    select: list[str] | None,
+    extend_select: list[str] | None,
+    ignore: list[str] | None,
+) -> RuleSelection | None:
+    """The project's [tool.aeroexec.verify] selection, then the command line's, as
+    layers (None when neither says anything)."""
+    configured = settings.verify or NO_VERIFY
+    layers = []
+    if configured.select is not None or configured.extend_select or configured.ignore:
+        layers.append(
+            SelectionLayer(
+                split_selectors(configured.select) if configured.select is not None else None,
+                split_selectors(configured.extend_select),
+                split_selectors(configured.ignore),
+            )
+        )
+    if select or extend_select or ignore:
+        layers.append(
+            SelectionLayer(
+                split_selectors(select) if select else None,
+                split_selectors(extend_select or ()),
+                split_selectors(ignore or ()),
+            )
+        )
+    per_file = {pattern: split_selectors(codes) for pattern, codes in configured.per_file_ignores}
+    if not layers and not per_file:
+        return None
+    return RuleSelection(tuple(layers), per_file, settings.root)
+
+
+def statistics_listing(report: Report, fmt: str) -> str:
+    """How many findings each rule has, most first (ruff's --statistics)."""
+    counts: dict[str, int] = {}
+    for finding in report.findings:
+        counts[finding.rule] = counts.get(finding.rule, 0) + 1
+    ordered = sorted(counts.items(), key=lambda item: (-item[1], item[0]))
+    names = {code: (rule.name if (rule := get(code)) else "") for code, _ in ordered}
+    if fmt == "json":
+        listing = [{"code": c, "name": names[c], "count": n} for c, n in ordered]
+        return json.dumps(listing, indent=2) + "\n"
+    width = max((len(str(n)) for _, n in ordered), default=1)
+    return "".join(f"{n:>{width}}\t{c}\t{names[c]}\n" for c, n in ordered)
 
 
 def rules_listing(output_format: VerifyFormat) -> str:

@@ -58,7 +58,47 @@ code that runs it (when the project declares its behaviors: `--behaviors`,
 `[tool.aeroexec] behaviors`, entry points).
 Rules marked *witness* attach, where one exists, the shortest activation sequence that
 makes the problem happen in the executive (`--witness`, and `witness` in JSON/SARIF);
-for task catalogs, the shortest `start_task` sequence on a model of that coordinator.
+for task catalogs, the shortest `start_task` sequence on a model of that coordinator
+(`aeroexec run` runs behavior catalogs only: a task witness is replayed on that model, and
+says so).
+
+## Choosing, silencing and fixing findings (as with ruff)
+
+- **What is checked.** `aeroexec verify CATALOG... -m MISSION...`; without either, the
+  `catalogs` and `missions` of `[tool.aeroexec.verify]` in the nearest `pyproject.toml`
+  (or `aeroexec.toml`), else its `catalog`. Missions are Python scripts (`.py`) or
+  Aerostack behavior-tree missions (`.yaml`, `nodes:`): against a task catalog on the
+  task coordinator's model (AX716, AX717), against a behavior catalog as the flow a
+  Python mission folds to (a node waited for is `execute_behavior`, one not waited for
+  `activate_behavior`), run in the executive. A behavior-tree file given as a CATALOG is
+  recognized as a mission.
+- **Which rules.** `--select`, `--extend-select` and `--ignore` take codes or prefixes
+  (`AX7`, `AX71`, `AX711`, `ALL`), comma-separated or repeated. The project's `select`,
+  `extend-select` and `ignore` are applied first, then the command line's: a `select`
+  starts again from what it names, `extend-select` adds, `ignore` removes; within one
+  layer the most specific selector wins, and an ignore wins a tie. `per-file-ignores =
+  {"missions/legacy_*.py" = ["AX7"]}` drops codes for the files a pattern matches
+  (relative to the configuration's directory).
+- **Suppression in place.** `# noqa: AX711` (or a bare `# noqa`) on the line of a mission
+  finding; `# aeroexec: ignore[AX401]` (or a bare `# aeroexec: ignore`) on the line of a
+  catalog finding, or alone on the line above it. In Python only real comments count
+  (not text in a string). The summary line counts what was suppressed in place.
+- **Counts.** `--statistics` prints, instead of the findings, how many each rule has
+  (count, code, name; `-f json` too), most first.
+- **Fixes.** `--diff` prints the mechanical fixes as a unified diff and changes nothing
+  (exit 1 when there is one); `--fix` applies them and reports what remains. A fix is
+  offered only where it is unambiguous: AX803 (a parameter key indented as a task key,
+  right after a `- parameter:` entry without one, is indented under it) and AX401 (a
+  behavior preempted one-sidedly that has no `incompatible_lists` gets the one list
+  that holds every behavior preempting it; a behavior preempting through one list it
+  names but is not in joins that list, when everything it preempts names it too).
+  Fixes of the same lines wait for the next pass (at most 10, as ruff does); `--diff`
+  shows the first. A fix replaces whole lines and leaves every
+  other byte of the file as it was (line endings, a missing final newline, the file's
+  mode); the file is replaced whole or not at all.
+- **Call paths.** A mission finding inside a helper function carries the calls that
+  lead to it, innermost first, as a compiler's notes: `m.py:9:5: note: in fly(), called
+  from here` in text, `related` in JSON, `relatedLocations` in SARIF.
 """
 
 

@@ -17,9 +17,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from aeroexec import interrupts
-from aeroexec.catalog.formats import AnyCatalog, read_any_catalog
+from aeroexec.catalog.formats import AnyCatalog, catalog_from_root, read_any_catalog
+from aeroexec.catalog.loader import read_catalog_text
 from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.tasks import TaskCatalog
+from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.executive.behavior import Behavior
 from aeroexec.gc_pause import paused_gc
@@ -31,7 +33,9 @@ from aeroexec.verifier.signals import SignalUse, check_signal_uses
 
 if TYPE_CHECKING:
     from aeroexec.plugins.discovery import BehaviorSet
+    from aeroexec.verifier.bt_missions import BtMission
     from aeroexec.verifier.missions import MissionScript
+    from aeroexec.verifier.selection import RuleSelection
 
 CatalogInput = str | Path | Catalog | TaskCatalog
 Library = Mapping[str, type[Behavior]]
@@ -110,7 +114,10 @@ def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None)
             continue
         assert rule.check is not None
         findings.extend(rule.check(context))  # type: ignore[arg-type]
-    return findings
+    # `run` cannot run a task catalog: its witnesses are replayed on the model instead.
+    from aeroexec.verifier.task_witness import checked_on_model
+
+    return checked_on_model(catalog, findings)
 
 
 def check_any_catalog(
@@ -136,7 +143,20 @@ def verify_catalog_file(path: str | Path) -> Report:
     return verify_catalog(read_any_catalog(path))
 
 
-def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) -> list[AnyCatalog]:
+def _looks_like_bt_mission(root: YNode | None) -> bool:
+    # Checked before importing the mission checks (start-up time of a catalog run).
+    return (
+        root is not None
+        and root.is_map
+        and root.get("nodes") is not None
+        and not any(root.get(k) is not None for k in ("behavior_descriptors", "behaviors", "tasks"))
+    )
+
+
+def _read_catalogs(
+    sources: Sequence[CatalogInput], errors: list[InputError], trees: list[BtMission]
+) -> list[AnyCatalog]:
+    """The catalogs; a behavior-tree mission given among them goes to `trees`."""
     loaded: list[AnyCatalog] = []
     for source in sources:
         if isinstance(source, (Catalog, TaskCatalog)):
@@ -150,17 +170,28 @@ def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) ->
         for path in paths:
             interrupts.check()
             try:
-                loaded.append(read_any_catalog(path))
+                text, file = read_catalog_text(path)
+                root = load_yaml(text, file)
+                if _looks_like_bt_mission(root):
+                    from aeroexec.verifier.bt_missions import parse_bt_mission
+
+                    trees.append(parse_bt_mission(root, file))
+                else:
+                    loaded.append(catalog_from_root(root, text, file))
             except AeroexecError as exc:
                 errors.append(InputError.of(exc, path))
     return loaded
 
 
 def _read_missions(
-    sources: Sequence[str | Path | MissionScript], errors: list[InputError]
+    sources: Sequence[str | Path | MissionScript],
+    errors: list[InputError],
+    trees: list[BtMission],
 ) -> list[MissionScript]:
+    """Python mission scripts; behavior-tree missions (`.yaml`, `.yml`) go to `trees`."""
     if not sources:
         return []
+    from aeroexec.verifier.bt_missions import read_bt_mission
     from aeroexec.verifier.missions import MissionScript, expand_mission_paths, read_mission
 
     scripts = [m for m in sources if isinstance(m, MissionScript)]
@@ -173,7 +204,10 @@ def _read_missions(
         for path in paths:
             interrupts.check()
             try:
-                scripts.append(read_mission(path))
+                if Path(path).suffix.lower() in (".yaml", ".yml"):
+                    trees.append(read_bt_mission(path))
+                else:
+                    scripts.append(read_mission(path))
             except AeroexecError as exc:
                 errors.append(InputError.of(exc, path))
     return scripts
@@ -187,6 +221,8 @@ def verify(
     library: Library | None = None,
     behaviors: BehaviorSet | None = None,
     signals: Sequence[SignalUse] = (),
+    selection: RuleSelection | None = None,
+    in_place: bool = True,
 ) -> Report:
     """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
     the mission scripts (paths, glob patterns or parsed scripts) that use them; every
@@ -198,11 +234,46 @@ def verify(
     (the behavior implementations, for their declared situations and destinations)
     default to the built-in world and the standard library. `signals`: the uses of
     signals in property files (`verify --spec`), checked against every behavior catalog.
+
+    `selection` keeps the rules (and per-file ignores) asked for (default: every
+    rule); with `in_place`, a finding whose line carries a suppression comment
+    (`# noqa: AX711`, `# aeroexec: ignore[AX401]`) is left out and counted in
+    `Report.suppressed`.
     """
     # The rules build graphs and indexes as large as the catalog: no cyclic garbage
     # worth the collector's passes over everything already loaded.
     with paused_gc():
-        return _verify(catalogs, missions, world, library, behaviors, signals)
+        report = _verify(catalogs, missions, world, library, behaviors, signals)
+    return filter_report(report, selection, in_place)
+
+
+def filter_report(
+    report: Report, selection: RuleSelection | None = None, in_place: bool = True
+) -> Report:
+    """The report less the findings `selection` does not ask for, and (with
+    `in_place`) less those a comment on their line suppresses."""
+    findings = report.findings
+    if selection is not None and not selection.everything:
+        findings = tuple(f for f in findings if selection.enabled(f.rule, f.file))
+    suppressed = 0
+    if in_place and findings:
+        from aeroexec.verifier.suppress import Suppressions
+
+        comments = Suppressions()
+        kept = tuple(f for f in findings if not comments.suppressed(f.file, f.line, f.rule))
+        suppressed = len(findings) - len(kept)
+        if suppressed:
+            findings = kept
+    if len(findings) == len(report.findings):
+        return report  # nothing left out: no second sort of every finding
+    return Report(
+        findings,
+        report.catalogs,
+        report.missions,
+        report.hidden,
+        report.input_errors,
+        report.suppressed + suppressed,
+    )
 
 
 def _verify(
@@ -216,8 +287,9 @@ def _verify(
     if library is None and behaviors is not None:
         library = behaviors.library()
     errors: list[InputError] = []
-    loaded = _read_catalogs(catalogs, errors)
-    scripts = _read_missions(missions, errors)
+    trees: list[BtMission] = []
+    loaded = _read_catalogs(catalogs, errors, trees)
+    scripts = _read_missions(missions, errors, trees)
     findings: list[Finding] = []
     behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
@@ -234,9 +306,25 @@ def _verify(
         for script in scripts:
             findings.extend(check_mission(script, catalog, note, library=library, world=world))
         findings.extend(check_signal_uses(signals, catalog, note, faults=index == 0))
+    # Behavior-tree missions: against task catalogs on the coordinator's model, against
+    # behavior catalogs as the Python missions are (their flow, run in the executive).
+    if trees:
+        from aeroexec.verifier.bt_missions import as_folded, check_bt_mission
+        from aeroexec.verifier.missions import check_mission
+
+        task_catalogs = [c for c in loaded if isinstance(c, TaskCatalog)]
+        for catalog in task_catalogs:
+            note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
+            for tree in trees:
+                findings.extend(check_bt_mission(tree, catalog, note))
+        folded = [as_folded(tree) for tree in trees]
+        for catalog in behavior_catalogs:
+            note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
+            for script in folded:
+                findings.extend(check_mission(script, catalog, note, library=library, world=world))
     return Report(
         tuple(findings),
         catalogs=tuple(c.source for c in loaded),
-        missions=tuple(s.path for s in scripts),
+        missions=(*(s.path for s in scripts), *(t.path for t in trees)),
         input_errors=tuple(errors),
     )

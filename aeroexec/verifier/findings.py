@@ -10,7 +10,17 @@ from typing import Any
 from aeroexec.catalog.model import Diagnostic, Severity
 from aeroexec.errors import AeroexecError, Mark, one_line
 
-__all__ = ["Finding", "InputError", "Outcome", "PathStep", "Report", "Severity", "Step", "Witness"]
+__all__ = [
+    "Finding",
+    "InputError",
+    "Outcome",
+    "PathStep",
+    "Related",
+    "Report",
+    "Severity",
+    "Step",
+    "Witness",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +112,35 @@ class PathStep:
 
 
 @dataclass(frozen=True, slots=True)
+class Related:
+    """Another place a finding leads through, as a compiler's note: the call of the
+    helper a mission finding sits in ("in fly(), called from here")."""
+
+    file: str
+    line: int
+    column: int
+    message: str
+
+    @classmethod
+    def called_from(cls, helper: str, mark: Mark) -> Related:
+        return cls(
+            mark.file, max(mark.line, 0), max(mark.column, 0), f"in {helper}(), called from here"
+        )
+
+    @property
+    def location(self) -> str:
+        return str(Mark(self.file, self.line, self.column))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "file": self.file,
+            "line": self.line,
+            "column": self.column,
+            "message": self.message,
+        }
+
+
+@dataclass(frozen=True, slots=True)
 class InputError:
     """An input the verifier could not read; the other inputs are still verified."""
 
@@ -146,6 +185,8 @@ class Finding:
     witness: Witness | None = None
     #: For mission findings: the way through the mission that leads here.
     path: tuple[PathStep, ...] = ()
+    #: Where the helper calls leading here are, innermost first (compiler notes).
+    related: tuple[Related, ...] = ()
 
     @classmethod
     def at(
@@ -157,6 +198,7 @@ class Finding:
         subjects: Iterable[str] = (),
         witness: Witness | None = None,
         path: tuple[PathStep, ...] = (),
+        related: tuple[Related, ...] = (),
     ) -> Finding:
         return cls(
             rule,
@@ -168,6 +210,7 @@ class Finding:
             tuple(dict.fromkeys(subjects)),
             witness,
             path,
+            related,
         )
 
     @classmethod
@@ -219,6 +262,7 @@ class Finding:
             "subjects": list(self.subjects),
             "witness": None if self.witness is None else self.witness.to_list(),
             "path": [step.to_dict() for step in self.path],
+            "related": [note.to_dict() for note in self.related],
         }
 
     def __str__(self) -> str:
@@ -239,6 +283,8 @@ class Report:
     hidden: int = 0
     #: Inputs that could not be read (the others were verified all the same).
     input_errors: tuple[InputError, ...] = ()
+    #: Findings silenced by a comment in place (noqa, or aeroexec: ignore[...]).
+    suppressed: int = 0
     _counts: Mapping[Severity, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -281,6 +327,7 @@ class Report:
             self.missions,
             self.hidden + len(self.findings) - len(kept),
             self.input_errors,
+            self.suppressed,
         )
 
     def by_rule(self, rule: str) -> tuple[Finding, ...]:

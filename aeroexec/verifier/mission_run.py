@@ -42,7 +42,7 @@ from aeroexec.executive.executive import Executive
 from aeroexec.executive.messages import ServiceResult
 from aeroexec.vehicles.base import Vec3
 from aeroexec.vehicles.world import World, default_world
-from aeroexec.verifier.findings import Finding, PathStep
+from aeroexec.verifier.findings import Finding, PathStep, Related
 from aeroexec.verifier.mission_fold import (
     Branch,
     CallNode,
@@ -52,6 +52,8 @@ from aeroexec.verifier.mission_fold import (
     Jump,
     Loop,
     MissionCall,
+    Try,
+    Unrolled,
     is_known,
 )
 from aeroexec.verifier.reach import describe_limits, travel_between
@@ -132,7 +134,8 @@ BOUNDED = mission_rule(
     "mission-analysis-bounded",
     INFO,
     """The abstract run of a mission reached one of its bounds (distinct states at one
-    point, loop iterations, calls sent), so some paths were not followed to the end. In
+    point, loop iterations, calls sent, constant loops unrolled: nested ones beyond 1,000
+    iterations in all stay loops), so some paths were not followed to the end. In
     flight: nothing; the sequence checks (AX709-AX714) are complete only up to the bound.
     Fix: nothing needed; a smaller mission function, or fewer undecidable branches,
     lets the verifier follow every path.""",
@@ -179,6 +182,11 @@ class _Ends:
     returns: list[_State] = field(default_factory=list)
 
 
+def called_from(via: tuple[tuple[str, Mark], ...]) -> tuple[Related, ...]:
+    """The helper calls leading to a mission call, innermost first, as notes."""
+    return tuple(Related.called_from(name, mark) for name, mark in reversed(via))
+
+
 def _path_text(steps: tuple[PathStep, ...]) -> str:
     shown = [s.describe() for s in steps[-SHOWN_STEPS:]]
     if len(steps) > SHOWN_STEPS:
@@ -203,6 +211,8 @@ class MissionRun:
         self.bounds_hit: list[str] = []
         self.findings: dict[tuple[Any, ...], Finding] = {}
         self.file = ""
+        #: The call being applied (its helper calls become the findings' notes).
+        self.calling: MissionCall | None = None
 
     # -- executives ----------------------------------------------------------------------
     def executive(self, state: _State) -> Executive:
@@ -251,6 +261,7 @@ class MissionRun:
         state: _State,
         *subjects: str,
     ) -> None:
+        via = self.calling.via if self.calling is not None else ()
         finding = Finding.at(
             rule,
             severity,
@@ -258,6 +269,7 @@ class MissionRun:
             Mark(self.file, at.line, at.column),
             subjects,
             path=state.steps,
+            related=called_from(via),
         )
         key = (rule, at.line, at.column, finding.subjects)
         known = self.findings.get(key)
@@ -267,6 +279,7 @@ class MissionRun:
     # -- running -------------------------------------------------------------------------
     def run(self, mission: FoldedMission, file: str) -> list[Finding]:
         self.file = file
+        self.bounds_hit.extend(mission.bounds)
         start = _State(position=self.world.start)
         ends = self.explore(mission.flow, [start])
         for state in [*ends.normal, *ends.returns, *ends.breaks, *ends.continues]:
@@ -316,6 +329,16 @@ class MissionRun:
                 current = self.merge(merged, f"line {node.mark.line}")
             elif isinstance(node, Loop):
                 current = self.loop(node, current, ends)
+            elif isinstance(node, Unrolled):
+                current = self.unrolled(node, current, ends)
+            elif isinstance(node, Try):
+                current = self.try_block(node, current, ends)
+            elif isinstance(node, Inline) and node.passthrough:
+                sub = self.explore(node.body, current)
+                ends.returns.extend(sub.returns)
+                ends.breaks.extend(sub.breaks)
+                ends.continues.extend(sub.continues)
+                current = self.merge(sub.normal, f"line {node.mark.line}")
             elif isinstance(node, Inline):
                 sub = self.explore(node.body, current)
                 # A helper's return comes back here; a raise ends the mission.
@@ -370,6 +393,100 @@ class MissionRun:
             )
         return self.merge(exits, f"line {node.mark.line}")
 
+    def unrolled(self, node: Unrolled, states: list[_State], ends: _Ends) -> list[_State]:
+        """A constant loop, iteration by iteration: `break` leaves it (skipping `else`),
+        `continue` goes on with the next item."""
+        broken: list[_State] = []
+        current = states
+        for number, body in enumerate(node.iterations, start=1):
+            if not current:
+                break
+            for state in current:
+                state.step(PathStep(node.mark.line, node.mark.column, f"iteration #{number}"))
+            sub = self.explore(body, current)
+            ends.returns.extend(sub.returns)
+            broken.extend(sub.breaks)
+            current = self.merge([*sub.normal, *sub.continues], f"line {node.mark.line}")
+        sub = self.explore(node.orelse, current)
+        ends.returns.extend(sub.returns)
+        ends.breaks.extend(sub.breaks)
+        ends.continues.extend(sub.continues)
+        return self.merge([*sub.normal, *broken], f"line {node.mark.line}")
+
+    def try_block(self, node: Try, states: list[_State], ends: _Ends) -> list[_State]:
+        """Python's `try`: a raise in the body goes to the handlers (and on, unless
+        one catches everything); `else` runs after a body that ended normally; the
+        `finally` block runs on every way out, then the way out goes on — unless the
+        `finally` block itself jumps, which replaces it."""
+        sub = self.explore(node.body, states)
+        raised = [s for s in sub.returns if s.raised]
+        ways = _Ends(
+            breaks=list(sub.breaks),
+            continues=list(sub.continues),
+            returns=[s for s in sub.returns if not s.raised],
+        )
+        still_raised: list[_State] = []
+        if node.handlers and raised:
+            catch_all = any(h.catches_all for h in node.handlers)
+            for state in raised:
+                for handler in node.handlers:
+                    caught = state.fork()
+                    caught.raised = False
+                    caught.step(PathStep(handler.mark.line, handler.mark.column, "except"))
+                    handled = self.explore(handler.body, [caught])
+                    ways.normal.extend(handled.normal)
+                    ways.breaks.extend(handled.breaks)
+                    ways.continues.extend(handled.continues)
+                    ways.returns.extend(s for s in handled.returns if not s.raised)
+                    still_raised.extend(s for s in handled.returns if s.raised)
+                if not catch_all:
+                    still_raised.append(state)
+        else:
+            still_raised = raised
+        after_else = self.explore(node.orelse, sub.normal)
+        ways.normal.extend(after_else.normal)
+        ways.breaks.extend(after_else.breaks)
+        ways.continues.extend(after_else.continues)
+        ways.returns.extend(s for s in after_else.returns if not s.raised)
+        still_raised.extend(s for s in after_else.returns if s.raised)
+        if not node.finalbody:
+            ends.breaks.extend(ways.breaks)
+            ends.continues.extend(ways.continues)
+            ends.returns.extend([*ways.returns, *still_raised])
+            return ways.normal
+        normal: list[_State] = []
+        for kind, group in (
+            ("normal", ways.normal),
+            ("break", ways.breaks),
+            ("continue", ways.continues),
+            ("return", ways.returns),
+            ("raise", still_raised),
+        ):
+            if not group:
+                continue
+            for state in group:
+                state.raised = False
+                state.step(PathStep(node.mark.line, node.mark.column, "finally"))
+            final = self.explore(node.finalbody, group)
+            # A jump inside `finally` replaces the one in flight.
+            ends.breaks.extend(final.breaks)
+            ends.continues.extend(final.continues)
+            ends.returns.extend(final.returns)
+            resumed = final.normal
+            if kind == "normal":
+                normal.extend(resumed)
+            elif kind == "break":
+                ends.breaks.extend(resumed)
+            elif kind == "continue":
+                ends.continues.extend(resumed)
+            elif kind == "return":
+                ends.returns.extend(resumed)
+            else:
+                for state in resumed:
+                    state.raised = True
+                ends.returns.extend(resumed)
+        return normal
+
     def signature(self, state: _State) -> tuple[Any, ...]:
         executive = self.executive(state)
         vehicle = executive.vehicle
@@ -394,6 +511,13 @@ class MissionRun:
     def apply(self, state: _State, call: MissionCall) -> None:
         step = PathStep(call.mark.line, call.mark.column, call.kind, call.behavior or "(not known)")
         state.step(step)
+        self.calling = call
+        try:
+            self.apply_call(state, call, step)
+        finally:
+            self.calling = None
+
+    def apply_call(self, state: _State, call: MissionCall, step: PathStep) -> None:
         executive = self.executive(state)
         result = self.send(executive, call)
         state.actions = (*state.actions, call)

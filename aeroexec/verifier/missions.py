@@ -21,7 +21,7 @@ import glob
 import io
 import tokenize
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +41,7 @@ from aeroexec.verifier.mission_fold import (
     MissionCall,
     fold_mission,
 )
-from aeroexec.verifier.mission_run import MissionRun
+from aeroexec.verifier.mission_run import MissionRun, called_from
 from aeroexec.verifier.registry import mission_rule
 from aeroexec.verifier.suggest import Suggester
 
@@ -66,8 +66,9 @@ UNKNOWN_BEHAVIOR = mission_rule(
     behavior the catalog does not define (the thesis' Appendix C mission activates
     `PAY_ATTENTION_TO_VISUAL_MARKERS`, which its Appendix A catalog calls
     `PAY_ATTENTION`). In flight: the call is rejected and the mission goes on without
-    it. Fix: use the catalog's name (the message suggests the closest one) or add the
-    behavior to the catalog.""",
+    it. A node of a behavior-tree mission naming a task the task catalog lacks (or that
+    no behavior performs) is reported the same way. Fix: use the catalog's name (the
+    message suggests the closest one) or add the behavior to the catalog.""",
 ).code
 UNKNOWN_ARGUMENT = mission_rule(
     "AX702",
@@ -76,7 +77,8 @@ UNKNOWN_ARGUMENT = mission_rule(
     """A mission passes an argument the behavior does not declare (names are compared
     ignoring case), passes one twice, or passes arguments by position instead of by
     keyword. In flight: the behavior specialist's format check rejects the
-    activation. Fix: use a declared argument name, as `name=value`.""",
+    activation. In a behavior-tree mission: a node's parameter the task does not declare.
+    Fix: use a declared argument name, as `name=value`.""",
 ).code
 BAD_VALUE = mission_rule(
     "AX703",
@@ -134,8 +136,9 @@ NOT_CHECKED = mission_rule(
     INFO,
     """Mission calls whose behavior name the verifier cannot know before the mission
     runs (read from a belief, built from data, passed through `*args`). Constants are
-    folded first — a name in a variable, a loop over a literal list of names, a helper
-    function called with constant arguments, an alias of the API — so what is left
+    folded first — a name in a variable or in a dict nothing changes (`NAMES['up']`), a
+    loop over a literal list of names or a constant `range(n)`, a helper function called
+    with constant arguments, an alias of the API — so what is left
     really depends on the run. In flight: these calls are checked by the executive
     only, when they happen. Reported once per mission with the lines. Fix: nothing
     needed; name the behavior literally where you can, to have it checked before
@@ -246,7 +249,10 @@ class MissionChecker:
         activated = {c.behavior for c in script.calls if c.kind == "activate"}
         executed = {c.behavior for c in script.calls if c.kind == "execute"}
         for call in script.calls:
-            findings.extend(self._check_call(call, activated, executed))
+            notes = called_from(call.via)
+            findings.extend(
+                replace(f, related=notes) for f in self._check_call(call, activated, executed)
+            )
         if script.folded.entry is None:
             findings.append(
                 self._finding(
@@ -274,8 +280,11 @@ class MissionChecker:
                 )
             )
         # A call site reached with the same values twice (two callers of a helper) says
-        # the same thing once.
-        return list(dict.fromkeys(findings))
+        # the same thing once, with the first call path.
+        first: dict[Finding, Finding] = {}
+        for finding in findings:
+            first.setdefault(replace(finding, related=()), finding)
+        return list(first.values())
 
     def _finding(
         self, rule: str, severity: Severity, message: str, mark: Mark, *subjects: str

@@ -168,7 +168,11 @@ _RULE_MODULES: dict[str, tuple[str, ...]] = {
     "loader": (),
     "catalog": ("aeroexec.verifier.rules",),
     "code": ("aeroexec.verifier.rules",),
-    "mission": ("aeroexec.verifier.missions",),
+    "mission": (
+        "aeroexec.verifier.missions",
+        "aeroexec.verifier.mission_run",
+        "aeroexec.verifier.bt_missions",
+    ),
     "property": ("aeroexec.verifier.signals",),
     "task": ("aeroexec.verifier.task_rules",),
 }

@@ -28,6 +28,8 @@ def format_finding(finding: Finding, *, witness: bool = False) -> str:
             properties.append(f"col={finding.column}")
     properties.append(f"title={escape_property(finding.rule)}")
     message = finding.message
+    for note in finding.related:
+        message += f"\n{note.location}: note: {note.message}"
     if witness and finding.witness is not None:
         message += f"\nwitness: {finding.witness.describe()}"
     return f"::{_COMMANDS[finding.severity]} {','.join(properties)}::{escape_data(message)}"

@@ -5,10 +5,11 @@ each with a `helpUri` to its paragraph of docs/rules.md when the docs can be fou
 each result has the rule id, a level, the message, one physical location (a region
 only when the line is known), a `partialFingerprints` entry that survives line shifts
 (rule, file and subjects, not the line), a code flow for mission findings (the path
-through the mission) and, as properties, the subjects and the witness. Inputs that could
-not be read are tool execution notifications of the run's invocation (with their
-location), and the invocation is then not successful: the log stays valid and holds the
-other inputs' results.
+through the mission), related locations for the helper calls leading to it and, as
+properties, the subjects and the witness. Inputs that could not be read are tool
+execution notifications of the run's invocation (with their location), and the
+invocation is then not successful: the log stays valid and holds the other inputs'
+results.
 """
 
 from __future__ import annotations
@@ -117,6 +118,15 @@ def _result(
     }
     if finding.path:
         result["codeFlows"] = [_code_flow(finding.file, finding.path, root)]
+    if finding.related:
+        result["relatedLocations"] = [
+            {
+                "id": number,
+                "physicalLocation": _physical(note.file, note.line, note.column, root),
+                "message": {"text": note.message},
+            }
+            for number, note in enumerate(finding.related)
+        ]
     if finding.rule in index:
         result["ruleIndex"] = index[finding.rule]
     return result

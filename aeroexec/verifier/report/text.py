@@ -33,6 +33,8 @@ def summary_line(report: Report, hidden: int = 0) -> str:
     line = f"{', '.join(counts)} in {_plural(inputs, 'file')}"
     if hidden:
         line += f" ({_plural(hidden, 'finding')} below --min-severity not shown)"
+    if report.suppressed:
+        line += f" ({report.suppressed} suppressed in place)"
     if report.input_errors:
         unread = len(report.input_errors)
         line += f"; {_plural(unread, 'input')} could not be read"
@@ -47,6 +49,7 @@ def render(report: Report, *, witness: bool = False, color: bool = False) -> str
     lines: list[str] = []
     for finding in report.findings:
         lines.append(format_finding(finding, color=color))
+        lines += [f"{note.location}: note: {note.message}" for note in finding.related]
         if witness and finding.witness is not None:
             lines.append(f"    witness: {finding.witness.describe()}")
     lines.append(summary_line(report, report.hidden))

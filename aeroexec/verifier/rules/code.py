@@ -4,15 +4,19 @@ These rules run when the project declares its behaviors (`--behaviors`, a `behav
 key in `[tool.aeroexec]` / aeroexec.toml, or an installed `aeroexec.behaviors` entry
 point): then `run` uses exactly that set, and a mismatch is a run-time failure found
 before flight. Argument names are compared as behaviors declare them
-(`Behavior.argument_names`), statically: no behavior code runs for these checks.
+(`Behavior.argument_names`) or, when a behavior declares none, as its hooks read them
+(`args["TEMPERATURE"]`, found in the AST of its class's source: `code_reads`),
+statically: no behavior code runs for these checks.
 """
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Iterator
 
 from aeroexec.catalog.model import BehaviorDescriptor, Severity
 from aeroexec.plugins.discovery import BehaviorSet, Implementation
+from aeroexec.verifier.code_reads import ArgumentsRead, arguments_read
 from aeroexec.verifier.findings import Finding
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.registry import code_rule
@@ -37,6 +41,25 @@ def _implemented(
         implementation = behaviors.implementations.get(definition.item.name)
         if implementation is not None and not implementation.stand_in:
             yield definition.item, implementation
+
+
+def read_names(implementation: Implementation) -> ArgumentsRead | None:
+    """The argument names the implementation reads: declared (`argument_names`, then
+    complete), else found in its source's AST; None when neither can tell."""
+    declared = implementation.cls.argument_names
+    if declared is not None:
+        return ArgumentsRead(tuple(declared), True)
+    try:
+        file = inspect.getsourcefile(implementation.cls)
+    except TypeError:
+        return None
+    if file is None:
+        return None
+    return arguments_read(file, implementation.cls.__name__, implementation.mark.line)
+
+
+def _how(implementation: Implementation) -> str:
+    return "reads" if implementation.cls.argument_names is not None else "reads (in its code)"
 
 
 @code_rule(
@@ -99,7 +122,9 @@ def implementation_not_in_catalog(
     "argument-not-read",
     E,
     """A catalog argument is not among the argument names the behavior's implementation
-    declares it reads (`argument_names`; names match regardless of letter case). In
+    declares it reads (`argument_names`; names match regardless of letter case) or,
+    when it declares none, among the constant keys its hooks look up (`args["DEPTH"]`,
+    found in the AST of its source; only when every look-up has a constant key). In
     flight: the specialist accepts the argument, the behavior never sees it, and the
     activation fails or does something else (the standard GO_TO_POINT reads
     `COORDINATES`; a catalog that calls it `POSITION` passes every check and fails at
@@ -108,9 +133,10 @@ def implementation_not_in_catalog(
 )
 def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
     for behavior, implementation in _implemented(graphs, behaviors):
-        declared = implementation.cls.argument_names
-        if declared is None:
+        read = read_names(implementation) if behavior.arguments else None
+        if read is None or not read.complete:
             continue
+        declared = read.names
         reads = {name.casefold() for name in declared}
         for spec in behavior.arguments:
             if spec.name.casefold() in reads:
@@ -120,7 +146,7 @@ def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
                 "AX903",
                 E,
                 f"{behavior.name}: argument {spec.name} is not read by "
-                f"{implementation.reference}, which reads {listed}",
+                f"{implementation.reference}, which {_how(implementation)} {listed}",
                 spec.mark if spec.mark.line else behavior.mark,
                 (behavior.name, spec.name),
             )
@@ -130,7 +156,8 @@ def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
     "AX904",
     "argument-not-in-catalog",
     I,
-    """The behavior's implementation declares an argument the catalog does not define.
+    """The behavior's implementation declares (or, declaring none, its code reads) an
+    argument the catalog does not define.
     In flight: no mission can pass it (the specialist refuses unknown arguments), so the
     behavior always runs with its default. Often deliberate (an optional argument the
     catalog does not expose); a misspelling otherwise. Fix: add it to the catalog's
@@ -138,14 +165,15 @@ def argument_not_read(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator
 )
 def argument_not_in_catalog(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
     for behavior, implementation in _implemented(graphs, behaviors):
-        for name in implementation.cls.argument_names or ():
+        read = read_names(implementation)
+        for name in read.names if read is not None else ():
             if behavior.argument(name) is not None:
                 continue
             yield graphs.finding(
                 "AX904",
                 I,
-                f"{behavior.name}: {implementation.reference} reads argument {name}, which "
-                "the catalog does not define: no mission can pass it",
+                f"{behavior.name}: {implementation.reference} {_how(implementation)} "
+                f"argument {name}, which the catalog does not define: no mission can pass it",
                 behavior.mark,
                 (behavior.name, name),
             )
@@ -156,13 +184,18 @@ def argument_not_in_catalog(graphs: CatalogGraphs, behaviors: BehaviorSet) -> It
     "arguments-not-declared",
     I,
     """The catalog gives a behavior arguments, and its implementation does not declare
-    which argument names it reads (`argument_names`), so the verifier cannot check them.
+    which argument names it reads (`argument_names`), nor do its hooks read them by
+    constant keys only (the AST shows `args[key]`, `**args`...), so the verifier cannot
+    check them all.
     In flight: a catalog argument the code does not read goes unnoticed until the
     behavior misbehaves. Fix: set `argument_names = ("NAME", ...)` on the class.""",
 )
 def arguments_not_declared(graphs: CatalogGraphs, behaviors: BehaviorSet) -> Iterator[Finding]:
     for behavior, implementation in _implemented(graphs, behaviors):
-        if implementation.cls.argument_names is None and behavior.arguments:
+        if not behavior.arguments or implementation.cls.argument_names is not None:
+            continue
+        read = read_names(implementation)
+        if read is None or not read.complete:
             yield graphs.finding(
                 "AX905",
                 I,
