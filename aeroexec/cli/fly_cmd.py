@@ -33,6 +33,9 @@ from aeroexec.cli.project import (
     project_behaviors,
 )
 from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome, silenced
+from aeroexec.executive.bus import BusObserver
+from aeroexec.executive.clock import NS_PER_S
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
@@ -43,6 +46,25 @@ class Failsafe(str, Enum):
     land = "land"
     hold = "hold"
     rtl = "rtl"
+
+
+class AutopilotTexts:
+    """Prints the autopilot's warnings and errors (STATUSTEXT: "Arm: Battery 1 below
+    minimum arming voltage", "PreArm: ...") as they arrive: they are why the vehicle
+    did not do what it was told."""
+
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        pass
+
+    def on_topic(self, record: TopicRecord) -> None:
+        data = record.data
+        if (
+            record.topic == "log"
+            and data.get("name") == "mavlink"
+            and data.get("level") in ("WARNING", "ERROR")
+            and str(data.get("message", "")).startswith("autopilot: ")
+        ):
+            typer.echo(f"[{record.log_time_ns / NS_PER_S:7.1f} s] {data['message']}")
 
 
 class OnExit(str, Enum):
@@ -156,10 +178,11 @@ def fly_command(
 
     However it ends, the vehicle is never left flying by surprise: see --on-exit,
     --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle
-    ended landed and disarmed with the link never lost; 1 when the mission raised, the
-    link was lost or the vehicle did not end landed and disarmed; 2 when an input could
-    not be read or the autopilot never answered; 128+N when stopped by signal N (after
-    the ending).
+    ended landed and disarmed with the link never lost; 1 when the mission raised, a
+    behavior ended PROCESS_FAILURE (the autopilot refused a command, or the vehicle had
+    a fault), the link was lost or the vehicle did not end landed and disarmed; 2 when
+    an input could not be read or the autopilot never answered; 128+N when stopped by
+    signal N (after the ending).
     """
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
     settings = project()
@@ -179,7 +202,9 @@ def fly_command(
         allow_unimplemented=allow_unimplemented,
         baud=baud,
     )
-    printer = [] if quiet else [ActivityLog(on_change=print_row)]
+    printer: list[BusObserver] = [AutopilotTexts()]
+    if not quiet:
+        printer.append(ActivityLog(on_change=print_row))
     with silenced(quiet):
         result = fly(
             config,
@@ -197,6 +222,11 @@ def fly_command(
     # The flight's own ending says what became of the vehicle (last, in one line): the
     # simulator's "vehicle lost" verdict is not needed here.
     mission_ok = report_outcome(result, debug, vehicle=False)
+    for failed in result.mission_failures():
+        error_line(
+            f"{running()}: mission failed: {failed.behavior} ended PROCESS_FAILURE: {failed.detail}"
+        )
+        mission_ok = False
     if not result.safe:
         error_line(f"{running()}: {result.problem()}")
     if not (mission_ok and result.safe):

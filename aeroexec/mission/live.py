@@ -32,6 +32,7 @@ from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import WallClock
 from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
+from aeroexec.mission.activity import Activation
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.ending import ON_EXIT, Ending, OnExit, end_flight
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
@@ -124,6 +125,16 @@ class FlightResult(SessionResult):
     def safe(self) -> bool:
         """The vehicle ended landed and disarmed, and the link never dropped."""
         return self.ending is not None and self.ending.down and self.link_losses == 0
+
+    def mission_failures(self) -> tuple[Activation, ...]:
+        """The activations that ended PROCESS_FAILURE: the behavior could not do what the
+        mission asked because the autopilot refused a command (or never acknowledged it),
+        the vehicle had a fault (link lost, a mode it was switched to), or the behavior's
+        own code failed. On a real aircraft that is a mission that failed, whatever the
+        script did with the result: `aeroexec fly` exits 1. Other endings (WRONG_PROGRESS,
+        TIMEOUT_REACHED, INTERRUPTED, a rejected activation) are results the mission
+        judges for itself, as in simulation."""
+        return tuple(a for a in self.activations if a.end_code == "PROCESS_FAILURE")
 
     def problem(self) -> str:
         """Why the flight is not `safe`, in one line ("" when it is)."""

@@ -73,6 +73,8 @@ STREAMS: tuple[tuple[int, float], ...] = (
 GCS_HEARTBEAT_MAX_HZ = 20.0
 #: Traffic kept while no tap is attached (beyond it, only counted).
 MAX_BUFFERED = 100_000
+#: STATUSTEXTs kept (the older half is dropped when full).
+MAX_TEXTS = 200
 
 _IGNORE_VELOCITY = (
     mavlink.POSITION_TARGET_TYPEMASK_VX_IGNORE
@@ -201,6 +203,10 @@ class MavlinkVehicle:
         self._last_gcs_heartbeat = -math.inf
         self._next_velocity = math.inf
         self._streams_requested = False
+        #: The autopilot's STATUSTEXTs: (our clock, severity, text), oldest first.
+        self.texts: list[tuple[float, int, str]] = []
+        #: Parameters read with `read_parameters` (PARAM_VALUE), by name.
+        self.parameters: dict[str, float] = {}
 
     # -- the tap -------------------------------------------------------------------------
     @property
@@ -294,6 +300,35 @@ class MavlinkVehicle:
             except VehicleCommandError as exc:
                 self._log(f"stream request not granted: {exc}")
 
+    def read_parameters(
+        self, names: tuple[str, ...], timeout: float = 2.0, min_sys_status: int = 0
+    ) -> dict[str, float]:
+        """Ask for `names` with PARAM_REQUEST_READ (again for the missing, every half
+        `timeout`) and wait for their PARAM_VALUEs, at most `timeout` s; what arrived.
+        Also waits (within `timeout`) for `min_sys_status` SYS_STATUS messages."""
+        target = self._require_link("PARAM_REQUEST_READ")
+        deadline = self._clock() + timeout
+        resend = -math.inf
+        while True:
+            missing = [n for n in names if n not in self.parameters]
+            if not missing and self.telemetry.sys_statuses >= min_sys_status:
+                break
+            now = self._clock()
+            if now >= deadline:
+                break
+            if missing and now >= resend:
+                resend = now + timeout / 2
+                for name in missing:
+                    self.link.send(
+                        mavlink.MAVLink_param_request_read_message(
+                            target[0], target[1], name.encode("ascii"), -1
+                        )
+                    )
+            check_interrupts()
+            self._process(self.link.poll(min(deadline - now, 0.05)))
+            self._service()
+        return {n: self.parameters[n] for n in names if n in self.parameters}
+
     def close(self) -> None:
         self.link.close()
 
@@ -369,7 +404,16 @@ class MavlinkVehicle:
                 self._acks.append(msg)
             return
         if kind == "STATUSTEXT":
-            self._log(f"autopilot: {msg.format_attr('text')}", _severity(msg.severity))
+            text = msg.format_attr("text")
+            if len(self.texts) >= MAX_TEXTS:
+                del self.texts[: MAX_TEXTS // 2]
+            self.texts.append((self._clock(), int(msg.severity), text))
+            self._log(f"autopilot: {text}", _severity(msg.severity))
+            return
+        if kind == "PARAM_VALUE":
+            name = msg.format_attr("param_id")
+            if math.isfinite(msg.param_value):
+                self.parameters[name] = float(msg.param_value)
             return
         self.telemetry.apply(msg)
 
@@ -479,6 +523,7 @@ class MavlinkVehicle:
         p = (*params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:7]
         attempts = 1 + (self.config.retries if retries is None else retries)
         self._acks.clear()
+        texts_before = len(self.texts)
         for attempt in range(attempts):
             self.link.send(
                 mavlink.MAVLink_command_long_message(
@@ -496,7 +541,9 @@ class MavlinkVehicle:
                     self._acks.clear()
                     if ack.result == mavlink.MAV_RESULT_ACCEPTED:
                         return ack
-                    raise VehicleCommandError(f"{name} refused: {result_name(ack.result)}")
+                    said = "; ".join(t for _, _, t in self.texts[texts_before:])
+                    because = f" (autopilot: {said})" if said else ""
+                    raise VehicleCommandError(f"{name} refused: {result_name(ack.result)}{because}")
                 self._acks.clear()
                 remaining = deadline - self._clock()
                 if remaining <= 0:
@@ -635,8 +682,9 @@ class MavlinkVehicle:
 
     @property
     def down(self) -> bool:
-        """Landed and disarmed, as last heard."""
-        return not self.telemetry.flying and not self.telemetry.armed
+        """Landed and disarmed, as the autopilot last said (EXTENDED_SYS_STATE and its
+        HEARTBEAT: never assumed from a command sent)."""
+        return not self.telemetry.flying and not self.telemetry.heard_armed
 
     def bring_down(self) -> str:
         """LAND, unless the autopilot is already landing or returning; what was done."""
