@@ -300,7 +300,12 @@ def test_a_signed_link_flies_and_an_unsigned_sender_is_rejected(
     unsigned_traffic = MemoryObserver()
     unsigned = fly(
         FlightConfig(
-            mission=mission, connect=f"udpin:127.0.0.1:{port}", ack_timeout=0.2, retries=1
+            mission=mission,
+            connect=f"udpin:127.0.0.1:{port}",
+            ack_timeout=0.2,
+            retries=1,
+            # Its parameter reads go unanswered too: without this, the preflight refuses.
+            allow_no_gcs_failsafe=True,
         ),
         observers=[unsigned_traffic],
     )

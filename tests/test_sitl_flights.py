@@ -73,6 +73,9 @@ class Sitl:
         self.workdir = workdir / f"sitl{self.instance}"
         self.workdir.mkdir()
         defaults = str(PARM)
+        # copter.parm leaves ArduCopter's GCS failsafe off (FS_GCS_ENABLE 0), which fly's
+        # preflight refuses: these flights have it on (land), as a real vehicle should.
+        params = {"FS_GCS_ENABLE": 5.0, **(params or {})}
         if params:
             extra = self.workdir / "test.parm"
             extra.write_text("".join(f"{name} {value:g}\n" for name, value in params.items()))

@@ -151,6 +151,12 @@ def fly_command(
         show_default=False,
     ),
     allow_remote: bool = allow_remote_option("Allow a non-loopback endpoint (a real network)."),
+    allow_no_gcs_failsafe: bool = typer.Option(
+        False,
+        "--allow-no-gcs-failsafe",
+        help="Fly although the autopilot's GCS failsafe is off (FS_GCS_ENABLE=0): nothing "
+        "brings the vehicle down if fly stops. Without it fly refuses before arming.",
+    ),
     connect_timeout: float = typer.Option(
         10.0,
         "--connect-timeout",
@@ -201,6 +207,7 @@ def fly_command(
         behaviors=project_behaviors(behaviors, settings),
         allow_unimplemented=allow_unimplemented,
         baud=baud,
+        allow_no_gcs_failsafe=allow_no_gcs_failsafe,
     )
     printer: list[BusObserver] = [AutopilotTexts()]
     if not quiet:
@@ -211,6 +218,7 @@ def fly_command(
             observers=printer,
             on_listening=_listening,
             on_connected=_connected,
+            on_preflight=typer.echo,
             announce=error_line,
         )
     print_summary(result, clock="flown", styled=use_color(color))

@@ -93,6 +93,17 @@ LOOP_PERIOD = 0.005  # s: how often the loop wakes at most
 #: Within this distance (m) of an overshoot point or an RTL stage's target, it counts as
 #: reached.
 REACHED = 0.02
+#: Vehicle seconds between two reports of the failing pre-arm checks (ArduCopter: 30).
+PREARM_REPORT_PERIOD = 30.0
+#: SYS_STATUS sensor bits mavsim reports present, enabled and (but for PREARM_CHECK when
+#: a pre-arm check fails) healthy.
+SENSORS = (
+    mavlink.MAV_SYS_STATUS_SENSOR_3D_GYRO
+    | mavlink.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+    | mavlink.MAV_SYS_STATUS_SENSOR_GPS
+    | mavlink.MAV_SYS_STATUS_SENSOR_BATTERY
+    | mavlink.MAV_SYS_STATUS_PREARM_CHECK
+)
 #: The parameters mavsim answers for, with their defaults (ArduCopter 4.5's, except
 #: FS_GCS_ENABLE: see the module docstring). MAV_PARAM_TYPE_REAL32 for all.
 PARAMETERS: dict[str, float] = {
@@ -242,6 +253,8 @@ class MavSim:
         self._home: Vec3 = self.sim.state().position
         self._ekf_announced = False
         self.params: dict[str, float] = {**PARAMETERS, **dict(self.config.params)}
+        # The first report when the EKF is ready (mavsim's boot messages end there).
+        self._next_prearm_report = self.config.ekf_delay
 
     # -- running -------------------------------------------------------------------------
     @property
@@ -302,6 +315,11 @@ class MavSim:
         if self.ekf_ready and not self._ekf_announced:
             self._ekf_announced = True
             self._statustext(mavlink.MAV_SEVERITY_INFO, "EKF3 IMU0 is using GPS")
+        if not self.armed and self.sim.time >= self._next_prearm_report:
+            # ArduCopter repeats its failing pre-arm checks every 30 s while disarmed.
+            self._next_prearm_report = self.sim.time + PREARM_REPORT_PERIOD
+            for failure in self._prearm_failures():
+                self._statustext(mavlink.MAV_SEVERITY_CRITICAL, f"PreArm: {failure}")
         landed = self._landed()
         if landed != self._landed_state:
             self._landed_state = landed
@@ -391,11 +409,14 @@ class MavSim:
             )
         elif message_id == mavlink.MAVLINK_MSG_ID_SYS_STATUS:
             battery = self.sim.state().battery
+            health = SENSORS
+            if self._prearm_failures():
+                health &= ~mavlink.MAV_SYS_STATUS_PREARM_CHECK
             self._send(
                 mavlink.MAVLink_sys_status_message(
-                    0,
-                    0,
-                    0,
+                    SENSORS,
+                    SENSORS,
+                    health,
                     0,
                     int(1000 * self.battery_voltage),
                     -1,
@@ -501,6 +522,15 @@ class MavSim:
                 names.index(name),
             )
         )
+
+    def _prearm_failures(self) -> list[str]:
+        """ArduCopter's wording for each pre-arm check that fails now."""
+        failures = []
+        if not self.ekf_ready:
+            failures.append("Need Position Estimate")
+        if self.battery_voltage < self.params["BATT_ARM_VOLT"]:
+            failures.append("Battery 1 below minimum arming voltage")
+        return failures
 
     @property
     def battery_voltage(self) -> float:

@@ -50,6 +50,7 @@ from aeroexec.vehicles.mavlink.endpoint import (
     MavlinkError,
     parse_endpoint,
 )
+from aeroexec.vehicles.mavlink.preflight import GcsFailsafeOff, preflight
 from aeroexec.vehicles.mavlink.vehicle import (
     FAILSAFES,
     Failsafe,
@@ -85,6 +86,8 @@ class FlightConfig:
     allow_unimplemented: bool = False
     #: Serial devices given without `,BAUD`.
     baud: int = DEFAULT_BAUD
+    #: Fly although the autopilot's GCS failsafe is off (one warning instead of a refusal).
+    allow_no_gcs_failsafe: bool = False
 
     def vehicle_config(self) -> MavlinkConfig:
         """The vehicle's configuration; `MavlinkError` for values that cannot work."""
@@ -158,12 +161,16 @@ def fly(
     catalog_text: str | None = None,
     on_listening: Callable[[MavlinkVehicle], None] | None = None,
     on_connected: Callable[[MavlinkVehicle], None] | None = None,
+    on_preflight: Callable[[str], None] | None = None,
     announce: Callable[[str], None] | None = None,
 ) -> FlightResult:
     """Fly one mission on a live autopilot. Unreadable inputs (mission, catalog, URL,
     key) and catalog behaviors without an implementation raise `AeroexecError`s before
     the link opens; no heartbeat raises `MavlinkError` before any recording file is
-    created. `announce` is told each stand-in once, before the link opens. A signal
+    created. `announce` is told each stand-in once, before the link opens. After the
+    connection, `preflight` reads the autopilot's failsafes (each line to
+    `on_preflight`): with its GCS failsafe off, `GcsFailsafeOff` before anything is
+    armed or recorded, unless `allow_no_gcs_failsafe` (then one warning to `announce`). A signal
     (`Interrupted`) is re-raised after the ending, with what was done in its notes."""
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
     script = script if script is not None else load_mission(config.mission)
@@ -183,6 +190,18 @@ def fly(
             raise
         if on_connected is not None:
             on_connected(vehicle)
+        checked = preflight(vehicle)
+        for line in checked.lines:
+            if on_preflight is not None:
+                on_preflight(line)
+        if checked.gcs_failsafe_off:
+            if not config.allow_no_gcs_failsafe:
+                raise GcsFailsafeOff(
+                    f"{checked.gcs_failsafe_off}, or pass --allow-no-gcs-failsafe; "
+                    "nothing was armed"
+                )
+            if announce is not None:
+                announce(f"warning: {checked.gcs_failsafe_off} (--allow-no-gcs-failsafe)")
         clock = WallClock()  # time 0: the link is up (not when we began to wait for it)
         metadata = {
             "aeroexec_version": __version__,
@@ -198,6 +217,7 @@ def fly(
             "on_exit": config.on_exit,
             "heartbeat_timeout_s": f"{config.heartbeat_timeout:g}",
             "link_timeout_s": f"{config.link_timeout:g}",
+            "failsafe_parameters": checked.metadata(),
             **stand_in_metadata(code),
         }
         activity, all_observers, recorder = session_observers(
