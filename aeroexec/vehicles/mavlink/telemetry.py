@@ -129,6 +129,10 @@ class Telemetry:
         return False
 
     @property
+    def heard_mode_name(self) -> str:
+        return "no mode" if self.heard_mode < 0 else mode_name(self.heard_mode)
+
+    @property
     def speed(self) -> float:
         """m/s, from the last LOCAL_POSITION_NED."""
         return math.hypot(*self.velocity_ned)

@@ -73,6 +73,8 @@ STREAMS: tuple[tuple[int, float], ...] = (
 GCS_HEARTBEAT_MAX_HZ = 20.0
 #: Traffic kept while no tap is attached (beyond it, only counted).
 MAX_BUFFERED = 100_000
+#: A failsafe's mode must show in a HEARTBEAT within this (s) of its COMMAND_ACK.
+FAILSAFE_BOUND_S = 5.0
 #: STATUSTEXTs kept (the older half is dropped when full).
 MAX_TEXTS = 200
 
@@ -195,6 +197,11 @@ class MavlinkVehicle:
         #: When the current loss began (the last heartbeat before it), or None.
         self.lost_since: float | None = None
         self._failsafe_pending = False
+        #: A failsafe mode change not yet seen in a HEARTBEAT: (mode, heartbeats before
+        #: it, when it was acknowledged, deadline).
+        self._failsafe_watch: tuple[int, int, float, float] | None = None
+        #: Why the last failsafe was not confirmed ("" when it was, or none ran).
+        self.failsafe_problem = ""
         self._acks: list[MAVLinkMessage] = []
         self._commanded_mode: int | None = None
         self._yaw_target_ned: float | None = None
@@ -363,6 +370,15 @@ class MavlinkVehicle:
         if self._failsafe_pending and not self.link_lost:
             self._failsafe_pending = False
             self._run_failsafe()
+        watch = self._failsafe_watch
+        if watch is not None and self._clock() > watch[3]:
+            self._failsafe_watch = None
+            self.failsafe_problem = (
+                f"failsafe {mode_name(watch[0])} not confirmed: the autopilot still says "
+                f"{self.telemetry.heard_mode_name} {FAILSAFE_BOUND_S:g} s after acknowledging it"
+            )
+            self._event("failsafe_unconfirmed", mode=mode_name(watch[0]))
+            self._log(self.failsafe_problem, "ERROR")
         limit = self.config.link_timeout
         if limit is not None and self.lost_since is not None:
             silent = self._clock() - self.lost_since
@@ -420,6 +436,18 @@ class MavlinkVehicle:
     def _heartbeat(self, item: Received) -> None:
         self.telemetry.apply(item.msg)
         self._last_heartbeat = self._clock()
+        watch = self._failsafe_watch
+        if (
+            watch is not None
+            and self.telemetry.heartbeats > watch[1]
+            and self.telemetry.heard_mode == watch[0]
+        ):
+            self._failsafe_watch = None
+            self._event(
+                "failsafe_seen",
+                mode=mode_name(watch[0]),
+                after_s=round(self._last_heartbeat - watch[2], 3),
+            )
         # Answer each autopilot heartbeat with ours (at most GCS_HEARTBEAT_MAX_HZ): an
         # autopilot that beats faster than 1 Hz runs faster than the wall clock (SITL
         # with a speed-up), and its GCS failsafe (FS_GCS_TIMEOUT) counts on its clock.
@@ -481,13 +509,20 @@ class MavlinkVehicle:
         if not self.telemetry.flying:
             self._event("failsafe", action="none", reason="not flying")
             return
+        self.failsafe_problem = ""
         try:
+            beats = self.telemetry.heartbeats
             if self.config.failsafe == "land":
                 self._set_mode(LAND)
             elif self.config.failsafe == "rtl":
                 self._set_mode(RTL)
             elif self.telemetry.custom_mode == GUIDED:
                 self._brake()
+            if self.config.failsafe != "hold" or self.telemetry.custom_mode == GUIDED:
+                # Acknowledged is not done: watch the HEARTBEATs for the mode.
+                now = self._clock()
+                mode = self.telemetry.custom_mode
+                self._failsafe_watch = (mode, beats, now, now + FAILSAFE_BOUND_S)
             # hold outside GUIDED: the autopilot's own failsafe (LAND, RTL) or a pilot
             # has the vehicle; a setpoint would be ignored, and taking over is not ours.
             self._event("failsafe", action=self.config.failsafe, mode=self.telemetry.mode)
