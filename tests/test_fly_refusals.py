@@ -14,8 +14,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
+from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
+from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
+from aeroexec.replay.refusals import recorded_refusals
 from aeroexec.vehicles.mavlink.preflight import FAILSAFE_PARAMETERS, preflight
 from aeroexec.vehicles.mavlink.vehicle import MavlinkConfig, MavlinkVehicle
 
@@ -155,3 +158,66 @@ def test_mavsim_answers_param_set_and_read_as_arducopter_does() -> None:
             )
         finally:
             vehicle.close()
+
+
+# -- 5. closed-loop replay of refused commands ------------------------------------------------
+
+LINK_LOSS = (
+    "    r = [api.executeBehavior('TAKE_OFF')]\n"
+    "    r.append(api.executeBehavior('GO_TO_POINT', coordinates=[0, 40, 1]))\n"
+    "    r.append(api.executeBehavior('ROTATE', angle=90))\n"
+    "    r.append(api.executeBehavior('GO_TO_POINT', relative_coordinates=[1, 0, 0]))\n"
+    "    r.append(api.executeBehavior('WAIT', duration=2))\n"
+    "    r.append(api.executeBehavior('LAND'))\n"
+    "    return r\n"
+)
+
+
+def replays_unchanged(record: Path, mission: Path) -> list[str]:
+    """The differences of each replay of `record`, with `mission` for closed loop."""
+    differences = []
+    for options in (
+        ReplayOptions(mode=Mode.open),
+        ReplayOptions(mode=Mode.closed, mission=str(mission)),
+        ReplayOptions(mode=Mode.closed),  # the recorded command stream, no script
+    ):
+        replayed = replay_recording(record, options)
+        assert replayed.diff is not None and replayed.diff.compared > 0, replayed.error
+        differences += [f"{options.mode}: {d.message}" for d in replayed.diff.differences]
+    return differences
+
+
+def test_closed_loop_replays_a_refused_arming_as_it_was_flown(tmp_path: Path) -> None:
+    port = free_udp_port()
+    record = tmp_path / "f.mcap"
+    mission = write_mission(tmp_path, TAKE_OFF_AND_LAND)
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", refuse=(400,)):
+        result = fly(
+            FlightConfig(mission=mission, connect=f"udpin:127.0.0.1:{port}", record=record)
+        )
+    assert [a.result for a in result.activations] == ["PROCESS_FAILURE", "REJECTED"]
+    assert recorded_refusals(record)[0].message == (
+        "MAV_CMD_COMPONENT_ARM_DISARM refused: TEMPORARILY_REJECTED"
+    )
+    assert replays_unchanged(record, mission) == []
+
+
+def test_closed_loop_replays_commands_refused_during_a_link_loss(tmp_path: Path) -> None:
+    port = free_udp_port()
+    record = tmp_path / "f.mcap"
+    mission = write_mission(tmp_path, LINK_LOSS)
+    sim_settings = {"speed_factor": 3.0, "drop_heartbeats_at": 4.0, "drop_for": 6.0}
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", **sim_settings):
+        result = fly(
+            FlightConfig(
+                mission=mission,
+                connect=f"udpin:127.0.0.1:{port}",
+                record=record,
+                heartbeat_timeout=1.0,
+            )
+        )
+    assert result.link_losses == 1
+    failed = {a.behavior: a.detail for a in result.mission_failures()}
+    assert "set_yaw: refused, link lost (no heartbeat for 1 s)" in failed["ROTATE"]
+    assert [r.behavior for r in recorded_refusals(record)] == ["ROTATE", "GO_TO_POINT", "LAND"]
+    assert replays_unchanged(record, mission) == []
