@@ -39,7 +39,7 @@ def landed_as_seen(actions: Sequence[str]) -> bool:
     """The ending's actions: an optional brake seen to hold, then LAND seen in a HEARTBEAT."""
     *brake, land = actions
     return bool(re.fullmatch(r"switched to LAND: seen in LAND \d+\.\d s later", land)) and (
-        brake == [] or (len(brake) == 1 and brake[0].startswith("braked: seen holding in GUIDED"))
+        brake == [] or (len(brake) == 1 and brake[0].startswith("braked: seen holding in BRAKE"))
     )
 
 

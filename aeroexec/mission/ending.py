@@ -9,7 +9,8 @@ state keeps being recorded:
 2. a lost link is waited for until `link_timeout` seconds after it went silent; when it
    comes back, the vehicle's failsafe (`--failsafe`) runs first;
 3. `on_exit` is applied to a vehicle that is airborne (or armed): `land` brakes a
-   vehicle moving in GUIDED first (a LAND at speed touches down metres on), switches to
+   vehicle moving in GUIDED first, in BRAKE (a LAND at speed touches down metres on,
+   wherever its descent ends), switches to
    LAND (unless the autopilot is already landing or returning) and waits, bounded, for
    landed and disarmed, disarming a vehicle left armed on the ground; `hold` brakes and
    holds in GUIDED and leaves it to the autopilot's own GCS failsafe; `none` leaves the
@@ -18,7 +19,7 @@ state keeps being recorded:
    has it: aeroexec never takes a vehicle away from a pilot.
 
 Every step is confirmed from the autopilot's own telemetry before it is reported,
-never assumed from what was sent: a brake by a HEARTBEAT in GUIDED and `STILL_FOR_S` of
+never assumed from what was sent: a brake by a HEARTBEAT in its mode and `STILL_FOR_S` of
 LOCAL_POSITION_NED slower than `STILL_SPEED` (within `BRAKE_BOUND_S`); LAND by a
 HEARTBEAT in LAND (within `MODE_BOUND_S`); landed and disarmed by EXTENDED_SYS_STATE
 and a HEARTBEAT. The actions say what was seen; a step not seen within its bound is
@@ -40,7 +41,7 @@ from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
 from aeroexec.mission.api import MissionAPI
 from aeroexec.vehicles.base import VehicleCommandError
-from aeroexec.vehicles.mavlink.convert import GUIDED, LAND
+from aeroexec.vehicles.mavlink.convert import BRAKE, GUIDED, LAND, mode_name
 from aeroexec.vehicles.mavlink.vehicle import LinkTimeout, MavlinkVehicle
 
 OnExit = Literal["land", "hold", "none"]
@@ -180,9 +181,10 @@ def _land(
                     f"{mode} was not commanded by aeroexec: a pilot or the autopilot has it",
                 )
             if vehicle.telemetry.custom_mode == GUIDED and vehicle.telemetry.speed > STILL_SPEED:
-                # Brake first: a LAND at speed is braked during the descent, and the
-                # vehicle touches down metres on (SITL at 7.7 m/s: 11-19 m).
-                _brake(stepper, vehicle, actions)  # unconfirmed: it lands all the same
+                # Brake first, in BRAKE (the hardest stop ArduCopter makes): a LAND at
+                # speed is braked during the descent, and the vehicle touches down
+                # metres on (SITL at 7.7 m/s: 11-19 m).
+                _brake(stepper, vehicle, actions, BRAKE)  # unconfirmed: it lands anyway
                 if vehicle.link_lost:
                     continue
             beats = vehicle.telemetry.heartbeats
@@ -230,11 +232,23 @@ def _see_mode(stepper: _Stepper, vehicle: MavlinkVehicle, mode: int, beats: int)
     return None
 
 
-def _brake(stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str]) -> str:
-    """Brake in GUIDED and wait until the autopilot's own telemetry shows it holding:
-    a HEARTBEAT in GUIDED and `STILL_FOR_S` of LOCAL_POSITION_NED slower than
-    `STILL_SPEED`, all after the brake. The action says what was seen; "" when the hold
-    was confirmed, else why not."""
+def _brake(
+    stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str], mode: int = GUIDED
+) -> str:
+    """Brake and wait until the autopilot's own telemetry shows it holding: a HEARTBEAT
+    in `mode` and `STILL_FOR_S` of LOCAL_POSITION_NED slower than `STILL_SPEED`, all
+    after the brake. In GUIDED the brake is a zero-velocity setpoint (re-sent, as no
+    setpoint is acknowledged), stopping at the autopilot's waypoint acceleration
+    (WPNAV_ACCEL, 2.5 m/s2); in BRAKE, ArduCopter's own mode for stopping as fast as it
+    can (7.5 m/s2). The action says what was seen; "" when the hold was confirmed, else
+    why not."""
+    name = mode_name(mode)
+    if mode != GUIDED:
+        try:
+            vehicle.switch_mode(mode)
+        except VehicleCommandError as exc:
+            actions.append(f"braked: NOT seen holding: {exc}")
+            return str(exc)
     t = vehicle.telemetry
     start = stepper.now
     bound = BRAKE_BOUND_S + BRAKE_PER_SPEED_S * t.speed
@@ -245,7 +259,7 @@ def _brake(stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str]) -> st
         if vehicle.link_lost:
             problem = "the link was lost while braking"
             break
-        if t.heartbeats > beats and t.heard_mode != GUIDED:
+        if t.heartbeats > beats and t.heard_mode != mode:
             problem = f"the autopilot switched to {t.heard_mode_name} while braking"
             break
         fresh = t.heartbeats > beats and t.positions > positions
@@ -254,7 +268,7 @@ def _brake(stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str]) -> st
             if stepper.now - still_since >= STILL_FOR_S:
                 x, y, z = vehicle.state().position
                 actions.append(
-                    f"braked: seen holding in GUIDED at ({x:.2f}, {y:.2f}, {z:.2f}) m, "
+                    f"braked: seen holding in {name} at ({x:.2f}, {y:.2f}, {z:.2f}) m, "
                     f"{t.speed:.2f} m/s, {stepper.now - start:.1f} s after the brake"
                 )
                 return ""
@@ -265,7 +279,7 @@ def _brake(stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str]) -> st
                 f"still {t.speed:.2f} m/s in {t.heard_mode_name} {bound:.0f} s after the brake"
             )
             break
-        if stepper.now - last_brake >= REBRAKE_S and t.speed > STILL_SPEED:
+        if mode == GUIDED and stepper.now - last_brake >= REBRAKE_S and t.speed > STILL_SPEED:
             last_brake = stepper.now
             try:
                 vehicle.hold_here()

@@ -730,6 +730,13 @@ class MavlinkVehicle:
         self._set_mode(LAND)
         return "switched to LAND"
 
+    def switch_mode(self, mode: int) -> None:
+        """Switch to `mode` (acknowledged; the HEARTBEAT shows it later): for an ending
+        (BRAKE before a landing)."""
+        self._velocity_ned = None
+        self._require_link(mode_name(mode))
+        self._set_mode(mode)
+
     def hold_here(self) -> str:
         """Brake and hold in GUIDED; in any other mode the autopilot keeps what it does."""
         if self.telemetry.custom_mode != GUIDED:
