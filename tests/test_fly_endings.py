@@ -383,3 +383,36 @@ def test_on_exit_hold_over_tcp_is_seen_holding_10_of_10_with_the_cpu_loaded(
                 assert math.dist(final["position"], where) < 0.5, (final, where)
             held += 1
     assert held == 10
+
+
+def test_a_hold_the_autopilot_does_not_show_is_not_reported_held(tmp_path: Path) -> None:
+    """The autopilot falls silent as the mission ends: no HEARTBEAT or position after
+    the brake shows it holding, so fly says so (not "held") and exits 1."""
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    api.activateBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n"
+        "    return api.executeBehavior('WAIT', duration=1)\n",
+    )
+    silent = {"drop_heartbeats_at": 1.2, "drop_for": 20.0}
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", **silent):
+        result = CliRunner().invoke(
+            app,
+            [
+                "fly",
+                str(mission),
+                "--connect",
+                f"udpin:127.0.0.1:{port}",
+                "--on-exit",
+                "hold",
+                "--link-timeout",
+                "1",
+            ],
+        )
+    assert result.exit_code == 1
+    assert "ending: braked: NOT seen holding: the link was lost while braking" in result.stdout
+    assert "seen holding" not in result.stdout.replace("NOT seen holding", "")
+    assert "aeroexec fly: vehicle not landed: hold not confirmed: the link was lost while" in (
+        result.stderr
+    )
