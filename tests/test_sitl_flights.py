@@ -545,6 +545,10 @@ def test_refused_arming_exits_1_with_the_autopilots_reason_and_replays_unchanged
 
     assert code == 1, out + err
     assert "Battery 1 below minimum arming voltage" in out  # printed as the autopilot said it
+    # The autopilot's pre-arm verdict, reported before the mission starts.
+    lines = out.splitlines()
+    start = next(i for i, line in enumerate(lines) if "start    TAKE_OFF" in line)
+    assert "preflight: pre-arm failure: SYS_STATUS unhealthy: PREARM_CHECK" in lines[:start]
     assert "end      TAKE_OFF PROCESS_FAILURE after 0.0 s (" in out
     failed = [line for line in err.splitlines() if "mission failed: TAKE_OFF" in line]
     assert failed and "MAV_CMD_COMPONENT_ARM_DISARM refused: FAILED (autopilot: " in failed[0]
