@@ -189,7 +189,21 @@ def _land(
                     continue
             beats = vehicle.telemetry.heartbeats
             action = _tell(vehicle.bring_down)
-            if action != "switched to LAND":
+            mode = vehicle.telemetry.custom_mode
+            if action.startswith("left it in ") and vehicle.telemetry.heard_mode != mode:
+                # Already descending as far as we know (a failsafe's LAND or RTL, just
+                # acknowledged): the autopilot's HEARTBEAT must say so too.
+                if _see_mode(stepper, vehicle, mode, beats) is None:
+                    actions.append(f"{action}: NOT seen in it within {MODE_BOUND_S:g} s")
+                    return _ending(
+                        vehicle,
+                        actions,
+                        f"{vehicle.telemetry.mode} not confirmed: the autopilot says "
+                        f"{vehicle.telemetry.heard_mode_name}",
+                        True,
+                    )
+                actions.append(action)
+            elif action != "switched to LAND":
                 actions.append(action)
             else:
                 seen = _see_mode(stepper, vehicle, LAND, beats)
