@@ -7,15 +7,19 @@ test_sitl_flights.py."""
 from __future__ import annotations
 
 import math
+import os
+import re
 import signal
 import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from live_helpers import free_udp_port, mavsim_thread, write_mission
+from live_helpers import free_tcp_port, free_udp_port, mavsim_thread, write_mission
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
@@ -31,6 +35,14 @@ AIRBORNE = (
 )
 
 
+def landed_as_seen(actions: Sequence[str]) -> bool:
+    """The ending's actions: an optional brake seen to hold, then LAND seen in a HEARTBEAT."""
+    *brake, land = actions
+    return bool(re.fullmatch(r"switched to LAND: seen in LAND \d+\.\d s later", land)) and (
+        brake == [] or (len(brake) == 1 and brake[0].startswith("braked: seen holding in BRAKE"))
+    )
+
+
 def config(mission: Path, port: int, **overrides: Any) -> FlightConfig:
     return FlightConfig(mission=mission, connect=f"udpin:127.0.0.1:{port}", **overrides)
 
@@ -44,7 +56,7 @@ def test_a_mission_that_returns_in_the_air_is_landed(tmp_path: Path) -> None:
         result = fly(config(write_mission(tmp_path, AIRBORNE), port))
         final = sim.stats()["final"]
     assert result.outcome.value == "GOAL_ACHIEVED"
-    assert result.ending is not None and result.ending.actions == ("switched to LAND",)
+    assert result.ending is not None and landed_as_seen(result.ending.actions)
     assert result.safe and result.ending.down
     assert final["mode"] == "LAND" and not final["armed"] and not final["flying"]
     assert abs(final["position"][0] - 1.0) < 0.06  # landed where the mission left it
@@ -60,7 +72,7 @@ def test_on_exit_hold_leaves_it_holding_and_exits_1(tmp_path: Path) -> None:
         time.sleep(0.3)
         final = sim.stats()["final"]
     assert result.exit_code == 1
-    assert "ending: braked to hold in GUIDED" in result.output
+    assert "ending: braked: seen holding in GUIDED at (1.0" in result.output
     last = result.output.strip().splitlines()[-1]
     assert last.startswith(
         "aeroexec fly: vehicle not landed: --on-exit hold left it flying; last seen flying at (1.0"
@@ -108,7 +120,7 @@ def test_a_mission_that_raises_in_the_air_is_landed_and_fails(tmp_path: Path) ->
         )
         final = sim.stats()["final"]
     assert result.exit_code == 1
-    assert "ending: switched to LAND" in result.output
+    assert "ending: switched to LAND: seen in LAND " in result.output
     assert "ending: vehicle on the ground at (" in result.output
     # The failure is reported at the mission's own line.
     last = result.output.strip().splitlines()[-1]
@@ -127,7 +139,8 @@ def test_behaviors_still_active_are_inhibited_before_landing(tmp_path: Path) -> 
         result = fly(config(mission, port))
         final = sim.stats()["final"]
     assert result.ending is not None
-    assert result.ending.actions == ("inhibited GO_TO_POINT", "switched to LAND")
+    assert result.ending.actions[0] == "inhibited GO_TO_POINT"
+    assert landed_as_seen(result.ending.actions[1:])
     go_to = next(a for a in result.activations if a.behavior == "GO_TO_POINT")
     assert go_to.end_code == "INTERRUPTED"
     assert result.safe and final["position"][1] < 5.0  # it never flew the 30 m
@@ -275,7 +288,8 @@ def test_sigterm_mid_flight_lands_finalizes_the_recording_and_exits_143(tmp_path
     ]
     assert [e["event"] for e in events] == ["connected", "mission_end", "ending"]
     assert events[1]["how"] == "SIGTERM"
-    assert events[2]["actions"] == ["inhibited GO_TO_POINT", "switched to LAND"]
+    assert events[2]["actions"][0] == "inhibited GO_TO_POINT"
+    assert landed_as_seen(events[2]["actions"][1:])
 
 
 def test_sigint_while_waiting_for_the_autopilot_exits_130_having_commanded_nothing(
@@ -321,3 +335,103 @@ def test_a_late_tick_is_not_made_up_for_with_a_burst() -> None:
     # The tick after the late one waits for the next slot of the grid instead of
     # running at once to catch up.
     assert following // tick > late // tick
+
+
+# -- confirmed endings --------------------------------------------------------------------------
+
+
+@contextmanager
+def cpu_loaded() -> Iterator[None]:
+    """Every core busy with a spinning process: the ending must hold all the same."""
+    spinners = [
+        subprocess.Popen([sys.executable, "-c", "while True: pass"])
+        for _ in range(os.cpu_count() or 2)
+    ]
+    try:
+        yield
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+            spinner.wait(5)
+
+
+HOLD_AT = re.compile(
+    r"ending: braked: seen holding in GUIDED at \((-?[\d.]+), (-?[\d.]+), (-?[\d.]+)\) m, "
+    r"[\d.]+ m/s, [\d.]+ s after the brake"
+)
+
+
+def test_on_exit_hold_over_tcp_is_seen_holding_10_of_10_with_the_cpu_loaded(
+    tmp_path: Path,
+) -> None:
+    """The mission returns with the vehicle flying a 30 m leg; --on-exit hold must stop it
+    there, as the autopilot's own telemetry shows, before fly says so and closes the TCP
+    connection, and it must still be there after fly is gone."""
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    api.activateBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n"
+        "    return api.executeBehavior('WAIT', duration=1)\n",
+    )
+    held = 0
+    with cpu_loaded():
+        for _ in range(10):
+            port = free_tcp_port()
+            with mavsim_thread(f"tcpin:127.0.0.1:{port}") as sim:
+                result = CliRunner().invoke(
+                    app,
+                    [
+                        "fly",
+                        str(mission),
+                        "--connect",
+                        f"tcp:127.0.0.1:{port}",
+                        "--on-exit",
+                        "hold",
+                    ],
+                )
+                seen = HOLD_AT.search(result.stdout)
+                first = sim.stats()["final"]
+                time.sleep(1.0)  # fly is gone: the vehicle holds by itself
+                later = sim.stats()["final"]
+            assert result.exit_code == 1, result.output
+            assert seen is not None, result.output
+            where = tuple(float(v) for v in seen.groups())
+            assert 0.5 < where[1] < 25.0, result.output  # stopped on the leg, short of its end
+            for final in (first, later):
+                assert final["mode"] == "GUIDED" and final["flying"]
+                assert math.dist(final["position"], where) < 0.5, (final, where)
+            held += 1
+    assert held == 10
+
+
+def test_a_hold_the_autopilot_does_not_show_is_not_reported_held(tmp_path: Path) -> None:
+    """The autopilot falls silent as the mission ends: no HEARTBEAT or position after
+    the brake shows it holding, so fly says so (not "held") and exits 1."""
+    port = free_udp_port()
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    api.activateBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n"
+        "    return api.executeBehavior('WAIT', duration=1)\n",
+    )
+    silent = {"drop_heartbeats_at": 1.2, "drop_for": 20.0}
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", **silent):
+        result = CliRunner().invoke(
+            app,
+            [
+                "fly",
+                str(mission),
+                "--connect",
+                f"udpin:127.0.0.1:{port}",
+                "--on-exit",
+                "hold",
+                "--link-timeout",
+                "1",
+            ],
+        )
+    assert result.exit_code == 1
+    assert "ending: braked: NOT seen holding: the link was lost while braking" in result.stdout
+    assert "seen holding" not in result.stdout.replace("NOT seen holding", "")
+    assert "aeroexec fly: vehicle not landed: hold not confirmed: the link was lost while" in (
+        result.stderr
+    )

@@ -220,7 +220,17 @@ def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
     # A command while the link is down is refused by the vehicle: a clean failure too.
     assert "set_yaw: refused, link lost (no heartbeat for 1 s)" in rows["ROTATE"].detail
     events = [e["event"] for e in memory.topics("mavlink/link")]
-    assert events == ["connected", "lost", "restored", "failsafe", "mission_end", "ending"]
+    assert events == [
+        "connected",
+        "lost",
+        "restored",
+        "failsafe",
+        "failsafe_seen",  # the autopilot's HEARTBEAT said LAND: acknowledged is not done
+        "mission_end",
+        "ending",
+    ]
+    seen = next(e for e in memory.topics("mavlink/link") if e["event"] == "failsafe_seen")
+    assert seen["mode"] == "LAND" and 0.0 < seen["after_s"] < 2.0
     assert memory.topics("mavlink/link")[3]["action"] == "land"
     # The vehicle ended down, but the flight lost its link: not a safe flight.
     assert result.ending is not None and result.ending.down
@@ -300,7 +310,12 @@ def test_a_signed_link_flies_and_an_unsigned_sender_is_rejected(
     unsigned_traffic = MemoryObserver()
     unsigned = fly(
         FlightConfig(
-            mission=mission, connect=f"udpin:127.0.0.1:{port}", ack_timeout=0.2, retries=1
+            mission=mission,
+            connect=f"udpin:127.0.0.1:{port}",
+            ack_timeout=0.2,
+            retries=1,
+            # Its parameter reads go unanswered too: without this, the preflight refuses.
+            allow_no_gcs_failsafe=True,
         ),
         observers=[unsigned_traffic],
     )

@@ -554,8 +554,11 @@ def test_mavsim_refuses_what_arducopter_refuses() -> None:
             VehicleCommandError, match="go_to: refused, the vehicle is on the ground"
         ):
             vehicle.go_to(0, 0, 1)
-        with pytest.raises(VehicleCommandError, match=r"^MAV_CMD_DO_SET_MODE refused: FAILED$"):
-            vehicle._set_mode(99)  # no such mode
+        with pytest.raises(
+            VehicleCommandError,
+            match=r"^MAV_CMD_DO_SET_MODE refused: FAILED \(autopilot: No such mode 99\)$",
+        ):
+            vehicle._set_mode(99)  # no such mode: the autopilot's STATUSTEXT says why
         vehicle.take_off(1.0)  # GUIDED, arm, take off: accepted
         with pytest.raises(VehicleCommandError, match=r"^MAV_CMD_NAV_TAKEOFF refused: FAILED$"):
             vehicle._command(take_off, (0, 0, 0, 0, 0, 0, 2.0))  # already flying

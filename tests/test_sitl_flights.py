@@ -16,10 +16,14 @@ Timeouts are wall-clock seconds with a wide margin: the machine may be busy.
 from __future__ import annotations
 
 import itertools
+import math
 import os
+import re
 import select
 import signal
+import socket
 import subprocess
+import sys
 import threading
 import time
 import tty
@@ -38,12 +42,34 @@ from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
 
+#: How far from the position at a SIGTERM at ~7.5 m/s the vehicle may touch down: what
+#: ArduCopter needs to stop (measured on SITL: ~15 m in BRAKE), with a margin. See the
+#: landing test; within 2 m is beyond its lean and jerk limits.
+LANDING_BOUND_M = 20.0
+
 REPO = Path(__file__).resolve().parents[1]
 BINARY = Path(os.environ.get("AEROEXEC_SITL") or REPO.parent / "shared" / "sitl" / "arducopter")
 PARM = BINARY.parent / "copter.parm"
 SPEEDUP = float(os.environ.get("SITL_SPEEDUP", "8"))
-#: SITL instances 30, 31, ...: ports 6060+, away from a SITL someone runs by hand (0..9).
-INSTANCES = itertools.count(30)
+#: SITL instances 30 and up (ports 6060+, away from a SITL someone runs by hand, 0..9).
+INSTANCES = itertools.count(30 + 10 * (os.getpid() % 10))
+
+
+def free_instance() -> int:
+    """The next instance whose TCP ports (5760, 5762, 5763 + 10 x instance) can be bound
+    now: a SITL that just stopped leaves its ports in TIME_WAIT for a minute, and SITL
+    cannot bind them then ("bind failed on port 6062"); another worktree's tests may
+    be flying SITLs too."""
+    for instance in INSTANCES:
+        try:
+            for port in (5760, 5762, 5763):
+                with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+                    s.bind(("0.0.0.0", port + 10 * instance))
+        except OSError:
+            continue
+        return instance
+    raise AssertionError("no free SITL instance")
+
 
 pytestmark = pytest.mark.skipif(
     not (BINARY.is_file() and os.access(BINARY, os.X_OK) and PARM.is_file()),
@@ -71,10 +97,13 @@ class Sitl:
         serial0: str | None = None,
         params: dict[str, float] | None = None,
     ) -> None:
-        self.instance = next(INSTANCES)
+        self.instance = free_instance()
         self.workdir = workdir / f"sitl{self.instance}"
         self.workdir.mkdir()
         defaults = str(PARM)
+        # copter.parm leaves ArduCopter's GCS failsafe off (FS_GCS_ENABLE 0), which fly's
+        # preflight refuses: these flights have it on (land), as a real vehicle should.
+        params = {"FS_GCS_ENABLE": 5.0, **(params or {})}
         if params:
             extra = self.workdir / "test.parm"
             extra.write_text("".join(f"{name} {value:g}\n" for name, value in params.items()))
@@ -126,6 +155,7 @@ class Monitor:
         self.mode: int | None = None
         self.landed: int | None = None
         self.position: tuple[float, float, float] | None = None
+        self.velocity: tuple[float, float, float] | None = None
         for message_id in (245, 32):  # EXTENDED_SYS_STATE, LOCAL_POSITION_NED at 4 Hz
             self.conn.mav.command_long_send(1, 1, 511, 0, message_id, 250000, 0, 0, 0, 0, 0)
 
@@ -147,6 +177,7 @@ class Monitor:
                 self.landed = int(msg.landed_state)
             elif kind == "LOCAL_POSITION_NED":
                 self.position = (float(msg.x), float(msg.y), float(msg.z))
+                self.velocity = (float(msg.vx), float(msg.vy), float(msg.vz))
             if None not in (self.armed, self.landed) and predicate(self):
                 return True
         return False
@@ -154,6 +185,32 @@ class Monitor:
     def down(self, timeout: float = 60.0) -> bool:
         """Wait until the autopilot says landed and disarmed."""
         return self.wait_for(lambda m: m.landed == ON_GROUND and m.armed is False, timeout)
+
+    def positions_for(self, seconds: float) -> list[tuple[float, float, float]]:
+        """Every position the autopilot reports during the next `seconds` (what it sent
+        before, while nobody read this connection, is skipped)."""
+        while self.conn.recv_match(blocking=False) is not None:
+            pass
+        self.position = None  # only what arrives from now on
+        seen: list[tuple[float, float, float]] = []
+
+        def note(m: Monitor) -> bool:
+            if m.position is not None:
+                seen.append(m.position)
+            return False
+
+        self.wait_for(note, seconds)
+        return seen
+
+    def command(self, command: int, *params: float) -> None:
+        """A COMMAND_LONG to the autopilot, as a second ground station would send it."""
+        p = (*params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:7]
+        self.conn.mav.command_long_send(1, 1, command, 0, *p)
+
+    def land_now(self, timeout: float = 90.0) -> bool:
+        """Switch to LAND (MAV_CMD_DO_SET_MODE) and wait until landed and disarmed."""
+        self.command(176, 1.0, float(LAND_MODE))
+        return self.down(timeout)
 
     def close(self) -> None:
         self.conn.close()
@@ -215,11 +272,16 @@ def link_events(topics: dict[str, list[Any]]) -> list[str]:
     return [e["event"] for e in topics.get("mavlink/link", []) if e["event"] != "connection"]
 
 
-def assert_replays_unchanged(record: Path) -> None:
-    for mode in (Mode.open, Mode.closed):
-        replayed = replay_recording(record, ReplayOptions(mode=mode))
+def assert_replays_unchanged(record: Path, mission: Path | None = None) -> None:
+    """Open loop, closed loop on the recorded commands, and (given the mission)
+    closed loop running the mission script again: no differences."""
+    options = [ReplayOptions(mode=Mode.open), ReplayOptions(mode=Mode.closed)]
+    if mission is not None:
+        options.append(ReplayOptions(mode=Mode.closed, mission=str(mission)))
+    for option in options:
+        replayed = replay_recording(record, option)
         assert replayed.diff is not None and replayed.diff.compared > 0
-        assert replayed.equal, (mode, [d.message for d in replayed.diff.differences])
+        assert replayed.equal, (option, [d.message for d in replayed.diff.differences])
 
 
 @contextmanager
@@ -274,7 +336,7 @@ def test_appendix_c_over_udp_lands_and_replays_unchanged(tmp_path: Path, flight:
     assert [e["code"] for e in topics["behavior_event"]].count("GOAL_ACHIEVED") == 6
     acks = [r["fields"] for r in topics["mavlink/rx"] if r["type"] == "COMMAND_ACK"]
     assert acks and all(a["result"] == 0 for a in acks)  # every command ACCEPTED
-    assert_replays_unchanged(record)
+    assert_replays_unchanged(record, APPENDIX_C)
     # What aeroexec's semantics promise holds on the real autopilot's flight too.
     safety = check_recording(record, load_properties(["aeroexec:safety"]))
     assert {v.name: v.status for v in safety.verdicts} == {
@@ -316,7 +378,7 @@ def test_a_longer_mission_over_tcp(tmp_path: Path, flight: Any) -> None:
     assert complete and link_events(topics) == ["connected", "mission_end", "ending"]
     velocity = [r for r in topics["mavlink/tx"] if r["type"] == "SET_POSITION_TARGET_LOCAL_NED"]
     assert any(r["fields"]["type_mask"] == 0x9C7 for r in velocity)  # START_MOVING's
-    assert_replays_unchanged(record)
+    assert_replays_unchanged(record, mission)
 
 
 # -- losing the link ---------------------------------------------------------------------------
@@ -360,6 +422,7 @@ def test_sitl_stopped_mid_flight_is_a_lost_link_then_the_failsafe_lands(
         "mission_end",
         "restored",
         "failsafe",
+        "failsafe_seen",
         "ending",
     ]
     failsafe = next(e for e in topics["mavlink/link"] if e["event"] == "failsafe")
@@ -368,7 +431,7 @@ def test_sitl_stopped_mid_flight_is_a_lost_link_then_the_failsafe_lands(
     assert monitor.down(timeout=60) and monitor.mode == LAND_MODE
     assert monitor.wait_for(lambda m: m.position is not None, 10)
     assert monitor.position is not None and 1.0 < monitor.position[0] < 55.0  # short of 60 m
-    assert_replays_unchanged(record)
+    assert_replays_unchanged(record, mission)
 
 
 def test_sitl_killed_mid_flight_ends_fly_with_the_vehicle_last_seen(
@@ -436,12 +499,15 @@ def test_sigterm_of_fly_mid_flight_lands_finalizes_and_exits_143(
     mission_end = next(e for e in topics["mavlink/link"] if e["event"] == "mission_end")
     assert mission_end["how"] == "SIGTERM"
     ending = topics["mavlink/link"][-1]
-    assert ending["down"] and ending["actions"] == ["inhibited GO_TO_POINT", "switched to LAND"]
+    assert ending["down"] and ending["actions"][0] == "inhibited GO_TO_POINT"
+    # At speed it brakes first, seen holding; then LAND, seen in the autopilot's HEARTBEAT.
+    assert ending["actions"][1].startswith("braked: seen holding in BRAKE at (")
+    assert ending["actions"][2].startswith("switched to LAND: seen in LAND ")
     interrupted = [e for e in topics["behavior_event"] if e["code"] == "INTERRUPTED"]
     assert [e["name"] for e in interrupted] == ["GO_TO_POINT"]
     monitor = flight(Monitor, sitl)
     assert monitor.down(timeout=30) and monitor.mode == LAND_MODE
-    assert_replays_unchanged(record)
+    assert_replays_unchanged(record, mission)
 
 
 def test_sigkill_of_fly_leaves_it_to_the_autopilots_gcs_failsafe(
@@ -510,3 +576,193 @@ def test_a_geofence_in_fly_spec_lands_at_the_fence(tmp_path: Path, flight: Any) 
     assert complete
     [early, *_] = topics["properties"]
     assert early["property"] == "geofence" and early["action"] == "land"
+
+
+# -- refusals and the failsafe preflight -------------------------------------------------------
+
+TAKE_OFF_AND_LAND = "    return [api.executeBehavior('TAKE_OFF'), api.executeBehavior('LAND')]\n"
+
+
+def test_refused_arming_exits_1_with_the_autopilots_reason_and_replays_unchanged(
+    tmp_path: Path, flight: Any
+) -> None:
+    """ArduCopter refuses to arm below BATT_ARM_VOLT (SITL's battery: 12.6 V): TAKE_OFF
+    ends PROCESS_FAILURE at once, fly exits 1 and says why in the autopilot's words."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, TAKE_OFF_AND_LAND)
+    fly = flight(Fly, fly_args(mission, f"udpin:127.0.0.1:{port}", record))
+    sitl = flight(
+        Sitl, tmp_path, serial0=f"udpclient:127.0.0.1:{port}", params={"BATT_ARM_VOLT": 20.0}
+    )
+    code, out, err = fly.finish()
+
+    assert code == 1, out + err
+    assert "Battery 1 below minimum arming voltage" in out  # printed as the autopilot said it
+    # The autopilot's pre-arm verdict, reported before the mission starts.
+    lines = out.splitlines()
+    start = next(i for i, line in enumerate(lines) if "start    TAKE_OFF" in line)
+    assert "preflight: pre-arm failure: SYS_STATUS unhealthy: PREARM_CHECK" in lines[:start]
+    assert "end      TAKE_OFF PROCESS_FAILURE after 0.0 s (" in out
+    failed = [line for line in err.splitlines() if "mission failed: TAKE_OFF" in line]
+    assert failed and "MAV_CMD_COMPONENT_ARM_DISARM refused: FAILED (autopilot: " in failed[0]
+    assert "Battery 1 below minimum arming voltage" in failed[0]
+    monitor = flight(Monitor, sitl)
+    assert monitor.wait_for(lambda m: True, 30) and monitor.armed is False
+    assert_replays_unchanged(record, mission)
+
+
+def test_a_gcs_failsafe_that_is_off_is_refused_before_arming(tmp_path: Path, flight: Any) -> None:
+    """copter.parm's FS_GCS_ENABLE 0: fly reads it at connect and refuses, nothing armed."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, TAKE_OFF_AND_LAND)
+    fly = flight(Fly, fly_args(mission, f"udpin:127.0.0.1:{port}", record))
+    sitl = flight(
+        Sitl, tmp_path, serial0=f"udpclient:127.0.0.1:{port}", params={"FS_GCS_ENABLE": 0.0}
+    )
+    code, out, err = fly.finish()
+
+    assert code == 2, out + err
+    assert "preflight: GCS failsafe off;" in out
+    (line,) = err.strip().splitlines()
+    assert line.startswith(
+        "aeroexec fly: error: the autopilot's GCS failsafe is off (FS_GCS_ENABLE=0): "
+    )
+    assert line.endswith("or pass --allow-no-gcs-failsafe; nothing was armed")
+    assert not record.exists()
+    monitor = flight(Monitor, sitl)
+    assert monitor.wait_for(lambda m: m.mode is not None, 30)
+    assert monitor.armed is False and monitor.mode != GUIDED_MODE  # never commanded
+
+
+# -- confirmed endings -------------------------------------------------------------------------
+
+
+@contextmanager
+def cpu_loaded() -> Iterator[None]:
+    """Every core busy with a spinning process."""
+    spinners = [
+        subprocess.Popen([sys.executable, "-c", "while True: pass"])
+        for _ in range(os.cpu_count() or 2)
+    ]
+    try:
+        yield
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+            spinner.wait(5)
+
+
+HOLD_AT = re.compile(
+    r"ending: braked: seen holding in GUIDED at \((-?[\d.]+), (-?[\d.]+), (-?[\d.]+)\) m"
+)
+#: How many --on-exit hold flights the hold test makes (SITL_HOLD_RUNS to change it).
+HOLD_RUNS = int(os.environ.get("SITL_HOLD_RUNS", "10"))
+
+
+def test_on_exit_hold_over_tcp_holds_10_of_10_with_the_cpu_loaded(
+    tmp_path: Path, flight: Any
+) -> None:
+    """The mission returns in the middle of a 60 m leg; fly must report the hold only
+    once the autopilot shows it, and the vehicle must still be there after fly has
+    closed the TCP connection (a GCS failsafe 60 s away, so it is the hold we see).
+    The test lands it from its own connection before the next flight."""
+    mission = write_mission(
+        tmp_path,
+        "    api.executeBehavior('TAKE_OFF')\n"
+        "    api.activateBehavior('GO_TO_POINT', relative_coordinates=[0, 40, 1])\n"
+        "    return api.executeBehavior('WAIT', duration=1)\n",
+    )
+    # Ten flights would drain the simulated 3.3 Ah battery below what TAKE_OFF accepts.
+    params = {**SLOW, "FS_GCS_TIMEOUT": 60.0, "BATT_CAPACITY": 100000.0}
+    sitl = flight(Sitl, tmp_path, params=params)
+    monitor = None
+    held = []
+    start = 0.0  # y (north) where the flight starts: where the last one was landed
+    with cpu_loaded():
+        for run in range(HOLD_RUNS):
+            record = tmp_path / f"hold{run}.mcap"
+            url = f"tcp:127.0.0.1:{sitl.tcp_port}"
+            fly = flight(Fly, fly_args(mission, url, record, "--on-exit", "hold"))
+            code, out, err = fly.finish()
+            assert code == 1, out + err
+            seen = HOLD_AT.search(out)
+            assert seen is not None, out + err
+            x, y, _ = (float(v) for v in seen.groups())
+            if monitor is None:  # SITL's second port is up once fly has flown
+                monitor = flight(Monitor, sitl)
+            # Two seconds of the autopilot's own positions after fly is gone.
+            positions = monitor.positions_for(2.0)
+            assert positions and monitor.mode == GUIDED_MODE
+            drift = max(math.hypot(p[1] - x, p[0] - y) for p in positions)  # NED vs ENU
+            held.append(drift < 1.0)
+            print(f"run {run}: seen holding at ({x}, {y}); {drift:.2f} m off it after fly exited")
+            assert 1.0 < y - start < 38.0, (start, y)  # stopped on the leg, short of its end
+            assert monitor.land_now(), "the test could not land the vehicle"
+            start = monitor.positions_for(0.5)[-1][0]
+    print(f"held {sum(held)} of {len(held)} over TCP with the CPU loaded")
+    assert all(held), held
+
+
+def test_sigterm_at_speed_brakes_then_lands_where_it_stopped(tmp_path: Path, flight: Any) -> None:
+    """At ~7.5 m/s a SIGTERM makes fly brake in BRAKE (ArduCopter's hardest stop), see
+    it holding, then LAND: the vehicle comes down where it stopped. Where it stopped is
+    as far from the signal as ArduCopter needs to stop (measured: ~15 m from 7.4 m/s, in
+    5.6 s; at most ~5.7 m/s2 at its 30 degree lean limit, so never within 2 m): see
+    docs/mavlink.md. The old LAND-at-once landed 11-19 m on, wherever the descent ended."""
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(
+        tmp_path,
+        "    return [api.executeBehavior('TAKE_OFF'),\n"
+        "            api.executeBehavior('GO_TO_POINT', coordinates=[0, 100, 3])]\n",
+    )
+    sitl = flight(Sitl, tmp_path, params={"WPNAV_SPEED": 770.0})
+    fly = flight(Fly, fly_args(mission, f"tcp:127.0.0.1:{sitl.tcp_port}", record))
+    fly.wait_for("start    GO_TO_POINT")
+    monitor = flight(Monitor, sitl)
+    fast = monitor.wait_for(
+        lambda m: m.velocity is not None and math.hypot(m.velocity[0], m.velocity[1]) > 7.0,
+        60,
+    )
+    assert fast, "never reached 7 m/s"
+    fly.popen.send_signal(signal.SIGTERM)
+    code, out, err = fly.finish()
+    assert code == 143, out + err
+    assert monitor.down(timeout=60)
+    assert monitor.wait_for(lambda m: m.position is not None, 10)
+    assert monitor.position is not None
+    touchdown = (monitor.position[1], monitor.position[0])  # NED -> ENU (x east, y north)
+    complete, topics = recorded(record)
+    assert complete
+    actions = topics["mavlink/link"][-1]["actions"]
+    braked = re.fullmatch(
+        r"braked: seen holding in BRAKE at \((-?[\d.]+), (-?[\d.]+), (-?[\d.]+)\) m, .*",
+        actions[1],
+    )
+    assert braked is not None, actions
+    assert actions[2].startswith("switched to LAND: seen in LAND"), actions
+    # Where fly was when the signal stopped the mission: its last state before mission_end.
+    end_ns = next(
+        t for t, e in topics_with_times(record, "mavlink/link") if e["event"] == "mission_end"
+    )
+    at_signal = [s for t, s in topics_with_times(record, "vehicle/state") if t <= end_ns][-1]
+    speed = math.hypot(*at_signal["velocity"][:2])
+    stopped = (float(braked.group(1)), float(braked.group(2)))
+    from_signal = math.dist(touchdown, at_signal["position"][:2])
+    print(
+        f"SIGTERM at {speed:.1f} m/s: stopped {math.dist(stopped, at_signal['position'][:2]):.1f}"
+        f" m on, touched down {from_signal:.1f} m from the position at the signal, "
+        f"{math.dist(touchdown, stopped):.2f} m from where it stopped"
+    )
+    assert speed > 6.5
+    assert math.dist(touchdown, stopped) < 1.0  # straight down from where it stopped
+    assert from_signal < LANDING_BOUND_M, from_signal
+
+
+def topics_with_times(record: Path, name: str) -> list[tuple[int, Any]]:
+    return [
+        (item.log_time_ns, item.data)
+        for item in open_recording(record).records()
+        if isinstance(item, RecordedTopic) and item.name == name
+    ]

@@ -38,6 +38,8 @@ from aeroexec.cli.project import (
 from aeroexec.cli.run_cmd import print_row, print_summary, report_outcome, silenced
 from aeroexec.cli.spec import SpecOption, monitor_for, print_verdicts
 from aeroexec.executive.bus import BusObserver
+from aeroexec.executive.clock import NS_PER_S
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
@@ -48,6 +50,25 @@ class Failsafe(str, Enum):
     land = "land"
     hold = "hold"
     rtl = "rtl"
+
+
+class AutopilotTexts:
+    """Prints the autopilot's warnings and errors (STATUSTEXT: "Arm: Battery 1 below
+    minimum arming voltage", "PreArm: ...") as they arrive: they are why the vehicle
+    did not do what it was told."""
+
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        pass
+
+    def on_topic(self, record: TopicRecord) -> None:
+        data = record.data
+        if (
+            record.topic == "log"
+            and data.get("name") == "mavlink"
+            and data.get("level") in ("WARNING", "ERROR")
+            and str(data.get("message", "")).startswith("autopilot: ")
+        ):
+            typer.echo(f"[{record.log_time_ns / NS_PER_S:7.1f} s] {data['message']}")
 
 
 class OnExit(str, Enum):
@@ -134,6 +155,12 @@ def fly_command(
         show_default=False,
     ),
     allow_remote: bool = allow_remote_option("Allow a non-loopback endpoint (a real network)."),
+    allow_no_gcs_failsafe: bool = typer.Option(
+        False,
+        "--allow-no-gcs-failsafe",
+        help="Fly although the autopilot's GCS failsafe is off (FS_GCS_ENABLE=0): nothing "
+        "brings the vehicle down if fly stops. Without it fly refuses before arming.",
+    ),
     connect_timeout: float = typer.Option(
         10.0,
         "--connect-timeout",
@@ -168,10 +195,11 @@ def fly_command(
 
     However it ends, the vehicle is never left flying by surprise: see --on-exit,
     --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle
-    ended landed and disarmed with the link never lost; 1 when the mission raised, the
-    link was lost or the vehicle did not end landed and disarmed; 2 when an input could
-    not be read or the autopilot never answered; 128+N when stopped by signal N (after
-    the ending).
+    ended landed and disarmed with the link never lost; 1 when the mission raised, a
+    behavior ended PROCESS_FAILURE (the autopilot refused a command, or the vehicle had
+    a fault), the link was lost or the vehicle did not end landed and disarmed; 2 when
+    an input could not be read or the autopilot never answered; 128+N when stopped by
+    signal N (after the ending).
     """
     apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
@@ -191,9 +219,12 @@ def fly_command(
         behaviors=project_behaviors(behaviors, settings, disable_plugin),
         allow_unimplemented=allow_unimplemented,
         baud=baud,
+        allow_no_gcs_failsafe=allow_no_gcs_failsafe,
     )
     monitor = monitor_for(spec, live=True)
-    observers: list[BusObserver] = [] if quiet else [ActivityLog(on_change=print_row)]
+    observers: list[BusObserver] = [AutopilotTexts()]
+    if not quiet:
+        observers.append(ActivityLog(on_change=print_row))
     if monitor is not None:
         observers.append(monitor)
     with silenced(quiet):
@@ -202,6 +233,7 @@ def fly_command(
             observers=observers,
             on_listening=_listening,
             on_connected=_connected,
+            on_preflight=typer.echo,
             announce=error_line,
         )
     print_summary(result, clock="flown", styled=use_color(color))
@@ -216,6 +248,11 @@ def fly_command(
     if monitor is not None:
         violated = print_verdicts(monitor.verdicts, result.recording or str(mission))
     mission_ok = report_outcome(result, debug, vehicle=False)
+    for failed in result.mission_failures():
+        error_line(
+            f"{running()}: mission failed: {failed.behavior} ended PROCESS_FAILURE: {failed.detail}"
+        )
+        mission_ok = False
     if not result.safe:
         error_line(f"{running()}: {result.problem()}")
     if not (mission_ok and result.safe) or violated:

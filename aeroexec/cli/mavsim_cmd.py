@@ -11,7 +11,7 @@ import typer
 
 from aeroexec.cli.app import app, guarded
 from aeroexec.cli.options import allow_remote_option, connect_option, world_option
-from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig, refuse_numbers
+from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig, parse_params, refuse_numbers
 from aeroexec.vehicles.mavlink.codec import signing_key as make_key
 from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_VEHICLE_URL, MavlinkError
 
@@ -71,6 +71,14 @@ def mavsim_command(
         "--refuse",
         metavar="COMMAND",
         help="Answer this command TEMPORARILY_REJECTED (e.g. MAV_CMD_CONDITION_YAW); repeatable.",
+        show_default=False,
+    ),
+    param: list[str] = typer.Option(
+        [],
+        "--param",
+        metavar="NAME=VALUE",
+        help="Set one of mavsim's autopilot parameters (FS_GCS_ENABLE=0, BATT_ARM_VOLT=20, "
+        "...); repeatable.",
         show_default=False,
     ),
     corrupt_every: int = typer.Option(
@@ -141,6 +149,7 @@ def mavsim_command(
     try:
         key = make_key(signing_key) if signing_key is not None else None
         refused = refuse_numbers(refuse)
+        params = parse_params(param)
         config = MavSimConfig(
             url=connect,
             allow_remote=allow_remote,
@@ -158,6 +167,7 @@ def mavsim_command(
             overshoot=overshoot,
             rtl_altitude=rtl_altitude,
             baud=baud,
+            params=params,
         )
     except ValueError as exc:
         raise MavlinkError(str(exc)) from None

@@ -24,6 +24,16 @@ Where it matters for tests it behaves as ArduCopter 4.5 SITL was measured to:
 Setpoints (SET_POSITION_TARGET_LOCAL_NED) are obeyed only in GUIDED while flying, as
 ArduCopter does; a velocity setpoint lapses after 3 s without a new one.
 
+Parameters: PARAM_REQUEST_READ (by name or index) and PARAM_SET are answered with
+PARAM_VALUE, as ArduCopter does, for the few parameters mavsim acts on or reports
+(`PARAMETERS`: the GCS and battery failsafes, `BATT_ARM_VOLT`); a name it does not
+have gets no answer (ArduCopter's silence), a PARAM_SET to it is ignored. One
+difference: `FS_GCS_ENABLE` defaults to 1 here (ArduCopter: 0), so a plain mavsim
+passes `aeroexec fly`'s failsafe preflight; `--param FS_GCS_ENABLE=0` is ArduCopter's
+default. `BATT_ARM_VOLT` above the battery's voltage (12.6 V full, 10.5 V empty)
+refuses arming as ArduCopter does: FAILED, after the STATUSTEXT
+"Arm: Battery 1 below minimum arming voltage".
+
 Fault injection for tests: heartbeats dropped for a while after take-off, commands
 refused by name (TEMPORARILY_REJECTED), every Nth outgoing packet corrupted; and a
 `speed_factor` that runs the vehicle model faster than the wall clock (positions,
@@ -83,6 +93,28 @@ LOOP_PERIOD = 0.005  # s: how often the loop wakes at most
 #: Within this distance (m) of an overshoot point or an RTL stage's target, it counts as
 #: reached.
 REACHED = 0.02
+#: Vehicle seconds between two reports of the failing pre-arm checks (ArduCopter: 30).
+PREARM_REPORT_PERIOD = 30.0
+#: SYS_STATUS sensor bits mavsim reports present, enabled and (but for PREARM_CHECK when
+#: a pre-arm check fails) healthy.
+SENSORS = (
+    mavlink.MAV_SYS_STATUS_SENSOR_3D_GYRO
+    | mavlink.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+    | mavlink.MAV_SYS_STATUS_SENSOR_GPS
+    | mavlink.MAV_SYS_STATUS_SENSOR_BATTERY
+    | mavlink.MAV_SYS_STATUS_PREARM_CHECK
+)
+#: The parameters mavsim answers for, with their defaults (ArduCopter 4.5's, except
+#: FS_GCS_ENABLE: see the module docstring). MAV_PARAM_TYPE_REAL32 for all.
+PARAMETERS: dict[str, float] = {
+    "FS_GCS_ENABLE": 1.0,
+    "FS_GCS_TIMEOUT": 5.0,
+    "BATT_FS_LOW_ACT": 0.0,
+    "BATT_FS_CRT_ACT": 0.0,
+    "BATT_LOW_VOLT": 10.5,
+    "BATT_CRT_VOLT": 0.0,
+    "BATT_ARM_VOLT": 0.0,
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,8 +150,17 @@ class MavSimConfig:
     rtl_altitude: float = 15.0
     #: Serial devices given without `,BAUD`.
     baud: int = DEFAULT_BAUD
+    #: Parameter values other than `PARAMETERS`' defaults: (name, value) pairs.
+    params: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
+        for name, value in self.params:
+            if name not in PARAMETERS:
+                raise ValueError(
+                    f"--param {name}: not one of mavsim's parameters ({', '.join(PARAMETERS)})"
+                )
+            if not math.isfinite(value):
+                raise ValueError(f"--param {name}: not a number: {value}")
         if not (math.isfinite(self.speed_factor) and self.speed_factor > 0):
             raise ValueError(f"speed factor must be positive, got {self.speed_factor}")
         if not (math.isfinite(self.heartbeat_hz) and self.heartbeat_hz > 0):
@@ -136,6 +177,21 @@ class MavSimConfig:
                 raise ValueError(f"{name.replace('_', '-')} must be >= 0, got {value}")
         if not (math.isfinite(self.creep_speed) and self.creep_speed > 0):
             raise ValueError(f"creep-speed must be positive, got {self.creep_speed}")
+
+
+def parse_params(texts: list[str] | tuple[str, ...]) -> tuple[tuple[str, float], ...]:
+    """`--param NAME=VALUE` values -> (name, value) pairs; `ValueError` for a bad one."""
+    out: list[tuple[str, float]] = []
+    for text in texts:
+        name, sep, value = text.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not sep or not name.strip() or not math.isfinite(number):
+            raise ValueError(f"--param {text!r}: expected NAME=VALUE (FS_GCS_ENABLE=0)")
+        out.append((name.strip().upper(), number))
+    return tuple(out)
 
 
 def refuse_numbers(names: list[str] | tuple[str, ...]) -> tuple[int, ...]:
@@ -196,6 +252,9 @@ class MavSim:
         self._rtl_stage: str | None = None
         self._home: Vec3 = self.sim.state().position
         self._ekf_announced = False
+        self.params: dict[str, float] = {**PARAMETERS, **dict(self.config.params)}
+        # The first report when the EKF is ready (mavsim's boot messages end there).
+        self._next_prearm_report = self.config.ekf_delay
 
     # -- running -------------------------------------------------------------------------
     @property
@@ -256,6 +315,11 @@ class MavSim:
         if self.ekf_ready and not self._ekf_announced:
             self._ekf_announced = True
             self._statustext(mavlink.MAV_SEVERITY_INFO, "EKF3 IMU0 is using GPS")
+        if not self.armed and self.sim.time >= self._next_prearm_report:
+            # ArduCopter repeats its failing pre-arm checks every 30 s while disarmed.
+            self._next_prearm_report = self.sim.time + PREARM_REPORT_PERIOD
+            for failure in self._prearm_failures():
+                self._statustext(mavlink.MAV_SEVERITY_CRITICAL, f"PreArm: {failure}")
         landed = self._landed()
         if landed != self._landed_state:
             self._landed_state = landed
@@ -345,13 +409,16 @@ class MavSim:
             )
         elif message_id == mavlink.MAVLINK_MSG_ID_SYS_STATUS:
             battery = self.sim.state().battery
+            health = SENSORS
+            if self._prearm_failures():
+                health &= ~mavlink.MAV_SYS_STATUS_PREARM_CHECK
             self._send(
                 mavlink.MAVLink_sys_status_message(
+                    SENSORS,
+                    SENSORS,
+                    health,
                     0,
-                    0,
-                    0,
-                    0,
-                    int(10500 + 2100 * battery),
+                    int(1000 * self.battery_voltage),
                     -1,
                     round(battery * 100),
                     0,
@@ -421,6 +488,54 @@ class MavSim:
             self._ack(msg, mavlink.MAVLINK_MSG_ID_SET_MODE, self._set_mode_message(msg))
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             self._setpoint(msg)
+        elif kind == "PARAM_REQUEST_READ":
+            self._param_read(msg)
+        elif kind == "PARAM_SET":
+            self._param_set(msg)
+
+    # -- parameters ----------------------------------------------------------------------
+    def _param_read(self, msg: MAVLinkMessage) -> None:
+        names = list(self.params)
+        if msg.param_index >= 0:
+            if msg.param_index < len(names):
+                self._send_param(names[msg.param_index])
+            return
+        name = _param_name(msg.param_id)
+        if name in self.params:
+            self._send_param(name)
+
+    def _param_set(self, msg: MAVLinkMessage) -> None:
+        name = _param_name(msg.param_id)
+        if name not in self.params or not math.isfinite(msg.param_value):
+            return  # ArduCopter ignores a parameter it does not have
+        self.params[name] = float(msg.param_value)
+        self._send_param(name)
+
+    def _send_param(self, name: str) -> None:
+        names = list(self.params)
+        self._send(
+            mavlink.MAVLink_param_value_message(
+                name.encode("ascii"),
+                self.params[name],
+                mavlink.MAV_PARAM_TYPE_REAL32,
+                len(names),
+                names.index(name),
+            )
+        )
+
+    def _prearm_failures(self) -> list[str]:
+        """ArduCopter's wording for each pre-arm check that fails now."""
+        failures = []
+        if not self.ekf_ready:
+            failures.append("Need Position Estimate")
+        if self.battery_voltage < self.params["BATT_ARM_VOLT"]:
+            failures.append("Battery 1 below minimum arming voltage")
+        return failures
+
+    @property
+    def battery_voltage(self) -> float:
+        """Volts: 12.6 full, 10.5 empty (a 3S pack), as SYS_STATUS reports it."""
+        return 10.5 + 2.1 * self.sim.state().battery
 
     def _ack(self, msg: MAVLinkMessage, command: int, result: int) -> None:
         self.counters.commands.append(
@@ -468,6 +583,12 @@ class MavSim:
                     self._statustext(mavlink.MAV_SEVERITY_CRITICAL, "Arm: Need Position Estimate")
                     return failed
                 if self.mode == LAND or self.in_flight or self.sim.state().battery <= 0.0:
+                    return failed
+                if self.battery_voltage < self.params["BATT_ARM_VOLT"]:
+                    self._statustext(
+                        mavlink.MAV_SEVERITY_CRITICAL,
+                        "Arm: Battery 1 below minimum arming voltage",
+                    )
                     return failed
                 self.armed = True
                 self._home = self.sim.state().position
@@ -635,3 +756,10 @@ class MavSim:
             print(text, end="")
         else:
             Path(path).write_text(text, encoding="utf-8")
+
+
+def _param_name(param_id: str | bytes) -> str:
+    """A PARAM_* message's 16-character id as a name (pymavlink gives str or bytes)."""
+    if isinstance(param_id, bytes):
+        param_id = param_id.decode("ascii", "replace")
+    return param_id.split("\x00", 1)[0].strip()

@@ -101,10 +101,13 @@ class ActivityLog:
         if index is None:
             self._early[uid] = record
             return
+        start = self.rows[index].start_ns
         row = replace(
             self.rows[index],
             end_code=str(record.data.get("code", "")),
-            end_ns=record.log_time_ns,
+            # A behavior that failed in its own activation call ended in it: on the wall
+            # clock its event can be stamped a few microseconds before the call's record.
+            end_ns=max(record.log_time_ns, start),
             detail=str(record.data.get("detail", "")),
         )
         self.rows[index] = row

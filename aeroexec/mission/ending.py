@@ -8,13 +8,22 @@ state keeps being recorded:
    shows the commands and a replay repeats them);
 2. a lost link is waited for until `link_timeout` seconds after it went silent; when it
    comes back, the vehicle's failsafe (`--failsafe`) runs first;
-3. `on_exit` is applied to a vehicle that is airborne (or armed): `land` switches to
+3. `on_exit` is applied to a vehicle that is airborne (or armed): `land` brakes a
+   vehicle moving in GUIDED first, in BRAKE (a LAND at speed touches down metres on,
+   wherever its descent ends), switches to
    LAND (unless the autopilot is already landing or returning) and waits, bounded, for
    landed and disarmed, disarming a vehicle left armed on the ground; `hold` brakes and
    holds in GUIDED and leaves it to the autopilot's own GCS failsafe; `none` leaves the
    vehicle as it is. A vehicle flying in a mode aeroexec did not command (a pilot took
    over with the sticks, or was flying it when aeroexec connected) is left to whoever
    has it: aeroexec never takes a vehicle away from a pilot.
+
+Every step is confirmed from the autopilot's own telemetry before it is reported,
+never assumed from what was sent: a brake by a HEARTBEAT in its mode and `STILL_FOR_S` of
+LOCAL_POSITION_NED slower than `STILL_SPEED` (within `BRAKE_BOUND_S`); LAND by a
+HEARTBEAT in LAND (within `MODE_BOUND_S`); landed and disarmed by EXTENDED_SYS_STATE
+and a HEARTBEAT. The actions say what was seen; a step not seen within its bound is
+said so, and the ending is not `down` (fly exits 1).
 
 A signal during the waits (a second Ctrl-C) stops waiting: the vehicle keeps doing what
 it was told. The result says whether the vehicle ended landed and disarmed, and the one
@@ -32,6 +41,7 @@ from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
 from aeroexec.mission.api import MissionAPI
 from aeroexec.vehicles.base import VehicleCommandError
+from aeroexec.vehicles.mavlink.convert import BRAKE, GUIDED, LAND, mode_name
 from aeroexec.vehicles.mavlink.vehicle import LinkTimeout, MavlinkVehicle
 
 OnExit = Literal["land", "hold", "none"]
@@ -44,6 +54,17 @@ LANDING_MARGIN_S = 20.0
 LANDING_RATE = 0.25
 #: An RTL first flies home (WPNAV_SPEED, 5 m/s by default): at least this speed (m/s).
 RETURN_RATE = 1.0
+#: Slower than this (m/s), as the autopilot's LOCAL_POSITION_NED says, is standing still.
+STILL_SPEED = 0.3
+#: ... for this long in a row (s): then a brake (a hold) is confirmed.
+STILL_FOR_S = 1.0
+#: A brake must be seen to stop within this (s), plus `BRAKE_PER_SPEED_S` per m/s.
+BRAKE_BOUND_S = 8.0
+BRAKE_PER_SPEED_S = 1.0
+#: An unconfirmed brake is sent again this often (s): a setpoint is never acknowledged.
+REBRAKE_S = 0.5
+#: A mode change must be seen in the autopilot's HEARTBEAT within this (s).
+MODE_BOUND_S = 5.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -84,7 +105,12 @@ def end_flight(
         if on_exit == "land":
             return _land(stepper, vehicle, actions, link_timeout)
         if on_exit == "hold" and vehicle.telemetry.flying:
-            actions.append(_tell(vehicle.hold_here))
+            if vehicle.telemetry.custom_mode != GUIDED:
+                actions.append(f"left it in {vehicle.telemetry.mode}")
+                return _ending(vehicle, actions, "--on-exit hold left it flying")
+            unconfirmed = _brake(stepper, vehicle, actions)
+            if unconfirmed:
+                return _ending(vehicle, actions, f"hold not confirmed: {unconfirmed}", True)
             return _ending(vehicle, actions, "--on-exit hold left it flying")
         if on_exit == "none" and not vehicle.down:
             return _ending(vehicle, actions, "--on-exit none left it as it was")
@@ -154,7 +180,44 @@ def _land(
                     actions,
                     f"{mode} was not commanded by aeroexec: a pilot or the autopilot has it",
                 )
-            actions.append(_tell(vehicle.bring_down))
+            if vehicle.telemetry.custom_mode == GUIDED and vehicle.telemetry.speed > STILL_SPEED:
+                # Brake first, in BRAKE (the hardest stop ArduCopter makes): a LAND at
+                # speed is braked during the descent, and the vehicle touches down
+                # metres on (SITL at 7.7 m/s: 11-19 m).
+                _brake(stepper, vehicle, actions, BRAKE)  # unconfirmed: it lands anyway
+                if vehicle.link_lost:
+                    continue
+            beats = vehicle.telemetry.heartbeats
+            action = _tell(vehicle.bring_down)
+            mode = vehicle.telemetry.custom_mode
+            if action.startswith("left it in ") and vehicle.telemetry.heard_mode != mode:
+                # Already descending as far as we know (a failsafe's LAND or RTL, just
+                # acknowledged): the autopilot's HEARTBEAT must say so too.
+                if _see_mode(stepper, vehicle, mode, beats) is None:
+                    actions.append(f"{action}: NOT seen in it within {MODE_BOUND_S:g} s")
+                    return _ending(
+                        vehicle,
+                        actions,
+                        f"{vehicle.telemetry.mode} not confirmed: the autopilot says "
+                        f"{vehicle.telemetry.heard_mode_name}",
+                        True,
+                    )
+                actions.append(action)
+            elif action != "switched to LAND":
+                actions.append(action)
+            else:
+                seen = _see_mode(stepper, vehicle, LAND, beats)
+                if seen is None:
+                    actions.append(f"switched to LAND: NOT seen in LAND within {MODE_BOUND_S:g} s")
+                    return _ending(
+                        vehicle,
+                        actions,
+                        f"LAND not confirmed: the autopilot still says "
+                        f"{vehicle.telemetry.heard_mode_name} {MODE_BOUND_S:g} s after it "
+                        "acknowledged LAND",
+                        True,
+                    )
+                actions.append(f"switched to LAND: seen in LAND {seen:.1f} s later")
             bound = _landing_bound(vehicle)
             deadline = stepper.now + bound
         elif not vehicle.telemetry.flying and vehicle.telemetry.armed and not commanded:
@@ -169,16 +232,93 @@ def _land(
     return _ending(vehicle, actions, "")
 
 
+def _see_mode(stepper: _Stepper, vehicle: MavlinkVehicle, mode: int, beats: int) -> float | None:
+    """Seconds until a HEARTBEAT after the `beats`-th said `mode`; None if none did
+    within `MODE_BOUND_S` (or the link was lost)."""
+    start = stepper.now
+    while not vehicle.link_lost:
+        t = vehicle.telemetry
+        if t.heartbeats > beats and t.heard_mode == mode:
+            return stepper.now - start
+        if stepper.now - start > MODE_BOUND_S:
+            return None
+        stepper.step()
+    return None
+
+
+def _brake(
+    stepper: _Stepper, vehicle: MavlinkVehicle, actions: list[str], mode: int = GUIDED
+) -> str:
+    """Brake and wait until the autopilot's own telemetry shows it holding: a HEARTBEAT
+    in `mode` and `STILL_FOR_S` of LOCAL_POSITION_NED slower than `STILL_SPEED`, all
+    after the brake. In GUIDED the brake is a zero-velocity setpoint (re-sent, as no
+    setpoint is acknowledged), stopping at the autopilot's waypoint acceleration
+    (WPNAV_ACCEL, 2.5 m/s2); in BRAKE, ArduCopter's own mode for stopping as fast as it
+    can (7.5 m/s2). The action says what was seen; "" when the hold was confirmed, else
+    why not."""
+    name = mode_name(mode)
+    if mode != GUIDED:
+        try:
+            vehicle.switch_mode(mode)
+        except VehicleCommandError as exc:
+            actions.append(f"braked: NOT seen holding: {exc}")
+            return str(exc)
+    t = vehicle.telemetry
+    start = stepper.now
+    bound = BRAKE_BOUND_S + BRAKE_PER_SPEED_S * t.speed
+    beats, positions = t.heartbeats, t.positions
+    still_since: float | None = None
+    last_brake = -math.inf
+    while True:
+        if vehicle.link_lost:
+            problem = "the link was lost while braking"
+            break
+        if t.heartbeats > beats and t.heard_mode != mode:
+            problem = f"the autopilot switched to {t.heard_mode_name} while braking"
+            break
+        fresh = t.heartbeats > beats and t.positions > positions
+        if fresh and t.speed <= STILL_SPEED:
+            still_since = stepper.now if still_since is None else still_since
+            if stepper.now - still_since >= STILL_FOR_S:
+                x, y, z = vehicle.state().position
+                actions.append(
+                    f"braked: seen holding in {name} at ({x:.2f}, {y:.2f}, {z:.2f}) m, "
+                    f"{t.speed:.2f} m/s, {stepper.now - start:.1f} s after the brake"
+                )
+                return ""
+        else:
+            still_since = None
+        if stepper.now - start > bound:
+            problem = (
+                f"still {t.speed:.2f} m/s in {t.heard_mode_name} {bound:.0f} s after the brake"
+            )
+            break
+        if mode == GUIDED and stepper.now - last_brake >= REBRAKE_S and t.speed > STILL_SPEED:
+            last_brake = stepper.now
+            try:
+                vehicle.hold_here()
+            except VehicleCommandError as exc:
+                problem = f"the brake failed: {exc}"
+                break
+        stepper.step()
+    actions.append(f"braked: NOT seen holding: {problem}")
+    return problem
+
+
 def _landing_bound(vehicle: MavlinkVehicle) -> float:
     x, y, z = vehicle.state().position
     return LANDING_MARGIN_S + max(z, 0.0) / LANDING_RATE + math.hypot(x, y) / RETURN_RATE
 
 
-def _ending(vehicle: MavlinkVehicle, actions: list[str], problem: str) -> Ending:
+def _ending(
+    vehicle: MavlinkVehicle, actions: list[str], problem: str, unconfirmed: bool = False
+) -> Ending:
     down = vehicle.down and not vehicle.link_lost and vehicle.target is not None
     return Ending(
-        down=down,
+        down=down and not unconfirmed,
         last_seen=vehicle.last_seen(),
         actions=tuple(actions),
-        problem="" if down else (problem or "it was never seen landed and disarmed"),
+        problem=""
+        if down and not unconfirmed
+        else (problem or "it was never seen landed and disarmed"),
     )

@@ -32,6 +32,7 @@ from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import WallClock
 from aeroexec.executive.executive import Executive
 from aeroexec.interrupts import Interrupted
+from aeroexec.mission.activity import Activation
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.ending import ON_EXIT, Ending, OnExit, end_flight
 from aeroexec.mission.script import Ending as ScriptEnding
@@ -53,6 +54,7 @@ from aeroexec.vehicles.mavlink.endpoint import (
     MavlinkError,
     parse_endpoint,
 )
+from aeroexec.vehicles.mavlink.preflight import GcsFailsafeOff, preflight
 from aeroexec.vehicles.mavlink.vehicle import (
     FAILSAFES,
     Failsafe,
@@ -88,6 +90,8 @@ class FlightConfig:
     allow_unimplemented: bool = False
     #: Serial devices given without `,BAUD`.
     baud: int = DEFAULT_BAUD
+    #: Fly although the autopilot's GCS failsafe is off (one warning instead of a refusal).
+    allow_no_gcs_failsafe: bool = False
 
     def vehicle_config(self) -> MavlinkConfig:
         """The vehicle's configuration; `MavlinkError` for values that cannot work."""
@@ -129,6 +133,16 @@ class FlightResult(SessionResult):
         """The vehicle ended landed and disarmed, and the link never dropped."""
         return self.ending is not None and self.ending.down and self.link_losses == 0
 
+    def mission_failures(self) -> tuple[Activation, ...]:
+        """The activations that ended PROCESS_FAILURE: the behavior could not do what the
+        mission asked because the autopilot refused a command (or never acknowledged it),
+        the vehicle had a fault (link lost, a mode it was switched to), or the behavior's
+        own code failed. On a real aircraft that is a mission that failed, whatever the
+        script did with the result: `aeroexec fly` exits 1. Other endings (WRONG_PROGRESS,
+        TIMEOUT_REACHED, INTERRUPTED, a rejected activation) are results the mission
+        judges for itself, as in simulation."""
+        return tuple(a for a in self.activations if a.end_code == "PROCESS_FAILURE")
+
     def problem(self) -> str:
         """Why the flight is not `safe`, in one line ("" when it is)."""
         if self.safe or self.ending is None:
@@ -151,12 +165,16 @@ def fly(
     catalog_text: str | None = None,
     on_listening: Callable[[MavlinkVehicle], None] | None = None,
     on_connected: Callable[[MavlinkVehicle], None] | None = None,
+    on_preflight: Callable[[str], None] | None = None,
     announce: Callable[[str], None] | None = None,
 ) -> FlightResult:
     """Fly one mission on a live autopilot. Unreadable inputs (mission, catalog, URL,
     key) and catalog behaviors without an implementation raise `AeroexecError`s before
     the link opens; no heartbeat raises `MavlinkError` before any recording file is
-    created. `announce` is told each stand-in once, before the link opens. A signal
+    created. `announce` is told each stand-in once, before the link opens. After the
+    connection, `preflight` reads the autopilot's failsafes (each line to
+    `on_preflight`): with its GCS failsafe off, `GcsFailsafeOff` before anything is
+    armed or recorded, unless `allow_no_gcs_failsafe` (then one warning to `announce`). A signal
     (`Interrupted`) is re-raised after the ending, with what was done in its notes."""
     observers = list(observers)
     catalog = catalog if catalog is not None else load_catalog(config.catalog)
@@ -177,6 +195,18 @@ def fly(
             raise
         if on_connected is not None:
             on_connected(vehicle)
+        checked = preflight(vehicle)
+        for line in checked.lines:
+            if on_preflight is not None:
+                on_preflight(line)
+        if checked.gcs_failsafe_off:
+            if not config.allow_no_gcs_failsafe:
+                raise GcsFailsafeOff(
+                    f"{checked.gcs_failsafe_off}, or pass --allow-no-gcs-failsafe; "
+                    "nothing was armed"
+                )
+            if announce is not None:
+                announce(f"warning: {checked.gcs_failsafe_off} (--allow-no-gcs-failsafe)")
         clock = WallClock()  # time 0: the link is up (not when we began to wait for it)
         metadata = {
             "aeroexec_version": __version__,
@@ -192,6 +222,7 @@ def fly(
             "on_exit": config.on_exit,
             "heartbeat_timeout_s": f"{config.heartbeat_timeout:g}",
             "link_timeout_s": f"{config.link_timeout:g}",
+            "failsafe_parameters": checked.metadata(),
             **stand_in_metadata(code),
         }
         activity, all_observers, recorder = session_observers(

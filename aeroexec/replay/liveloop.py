@@ -3,7 +3,8 @@ against the vehicle as it was recorded.
 
 A live flight cannot be simulated again (the autopilot, its wind and its timing were
 real), so where closed-loop replay of a simulated session re-simulates, this one plays
-the recorded `vehicle/state` back (`ReplayVehicle`) and runs everything that decides on
+the recorded `vehicle/state` back (`ReplayVehicle`, refusing again the commands the
+recorded vehicle refused: `aeroexec.replay.refusals`) and runs everything that decides on
 it for real: the mission script (`mission.py`), the catalog's behaviors from the
 standard library, the executive. With the recorded catalog and unchanged code every
 behavior ends at the same tick, for the same reason, as in the flight.
@@ -37,6 +38,7 @@ from aeroexec.replay.closedloop import ChosenCatalog, mission_prints_discarded, 
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
+from aeroexec.replay.refusals import recorded_refusals
 from aeroexec.replay.source import RecordingSource
 from aeroexec.replay.vehicle import ReplayVehicle
 
@@ -140,7 +142,15 @@ def replay_live(
     # Without a script the recorded commands include the ending's: nothing to stop.
     stop = end[0] if end is not None and stopped and script is not None else None
     clock = RecordedClock(ticks, stop_ns=stop)
-    vehicle = ReplayVehicle(states, clock)
+    # The recorded vehicle's refusals (arming refused, a command while the link was
+    # lost) are its answers too: the replayed one gives them again.
+    vehicle = ReplayVehicle(
+        states,
+        clock,
+        refusals=recorded_refusals(path),
+        upcoming=clock.upcoming_ns,
+        heartbeat_timeout=run.metadata.get("heartbeat_timeout_s"),
+    )
     builder = OutcomeBuilder(horizon_ns)
     metadata = {
         "aeroexec_version": __version__,
@@ -175,6 +185,9 @@ def replay_live(
             observers=observers,
             drone=drone,
         )
+        # The state the flight started from, as fly records it: a mission that never
+        # stepped (its first command refused at once) ends in it.
+        executive.publish_vehicle_state()
         if script is None:
             # The recorded vehicle moves on the recorded clock: the commands go at their
             # recorded times, not when the previous one ends here.

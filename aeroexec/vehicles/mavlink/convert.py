@@ -37,6 +37,7 @@ COPTER_MODES: dict[int, str] = {
 GUIDED = 4
 RTL = 6
 LAND = 9
+BRAKE = 17
 STABILIZE = 0
 
 

@@ -17,7 +17,10 @@ Imported only when a TCP or serial link is opened: `mavutil` is a heavy import.
 
 from __future__ import annotations
 
+import contextlib
+import select
 import socket
+import time
 from typing import Any
 
 from pymavlink import mavutil
@@ -103,6 +106,27 @@ class SerialPort(mavutil.mavserial):  # type: ignore[misc]
 
     def fileno(self) -> int | None:
         return self.fd if isinstance(self.fd, int) else None
+
+
+#: Seconds `finish` waits for the peer's end of a TCP connection.
+FINISH_S = 0.25
+
+
+def finish(sock: socket.socket | None, wait: float = FINISH_S) -> None:
+    """End a TCP connection so the last packets sent are read: FIN after them, then
+    what the peer still sends is read (and dropped) until its FIN, at most `wait` s.
+    A plain close with unread data in our receive queue sends a reset instead, and a
+    reset can make the peer drop what it had not read yet: the last setpoints."""
+    if sock is None:
+        return
+    with contextlib.suppress(OSError):
+        sock.shutdown(socket.SHUT_WR)
+        deadline = time.monotonic() + wait
+        while (left := deadline - time.monotonic()) > 0:
+            if not select.select([sock], [], [], left)[0]:
+                break
+            if not sock.recv(CHUNK):
+                break  # the peer's FIN
 
 
 def open_stream(endpoint: Endpoint, *, timeout: float, system: int, component: int) -> Any:

@@ -71,6 +71,15 @@ class Telemetry:
     landed_state: int = mavlink.MAV_LANDED_STATE_UNDEFINED
     heartbeats: int = 0
     positions: int = 0
+    #: As the autopilot's last HEARTBEAT said (never assumed from a command we sent):
+    #: what an ending is confirmed by.
+    heard_armed: bool = False
+    heard_mode: int = -1
+    #: SYS_STATUS's sensor bit fields (MAV_SYS_STATUS_SENSOR), and how many were heard.
+    sensors_present: int = 0
+    sensors_enabled: int = 0
+    sensors_health: int = 0
+    sys_statuses: int = 0
 
     @property
     def mode(self) -> str:
@@ -92,8 +101,10 @@ class Telemetry:
                 return False
             self.heartbeats += 1
             self.armed = bool(msg.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
+            self.heard_armed = self.armed
             if msg.base_mode & mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED:
                 self.custom_mode = int(msg.custom_mode)
+                self.heard_mode = self.custom_mode
             self.system_status = int(msg.system_status)
             return True
         if kind == "LOCAL_POSITION_NED":
@@ -105,6 +116,10 @@ class Telemetry:
             self.yaw_ned = float(msg.yaw)
             return True
         if kind == "SYS_STATUS":
+            self.sys_statuses += 1
+            self.sensors_present = int(msg.onboard_control_sensors_present)
+            self.sensors_enabled = int(msg.onboard_control_sensors_enabled)
+            self.sensors_health = int(msg.onboard_control_sensors_health)
             if msg.battery_remaining >= 0:  # -1: the autopilot does not know
                 self.battery = min(1.0, msg.battery_remaining / 100.0)
             return True
@@ -112,6 +127,19 @@ class Telemetry:
             self.landed_state = int(msg.landed_state)
             return True
         return False
+
+    @property
+    def heard_mode_name(self) -> str:
+        return "no mode" if self.heard_mode < 0 else mode_name(self.heard_mode)
+
+    @property
+    def speed(self) -> float:
+        """m/s, from the last LOCAL_POSITION_NED."""
+        return math.hypot(*self.velocity_ned)
+
+    def unhealthy_sensors(self) -> int:
+        """SYS_STATUS bits present and enabled but not healthy (0 before a SYS_STATUS)."""
+        return self.sensors_present & self.sensors_enabled & ~self.sensors_health
 
     def vehicle_state(self, fault: str = "") -> VehicleState:
         return VehicleState(

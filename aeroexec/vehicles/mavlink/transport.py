@@ -312,6 +312,10 @@ class StreamTransport:
     def close(self) -> None:
         conn, self._conn = self._conn, None
         if conn is not None:
+            if self.endpoint.kind in ("tcp", "tcpin"):
+                from aeroexec.vehicles.mavlink.streams import finish
+
+                finish(conn.port)
             conn.close()
 
 

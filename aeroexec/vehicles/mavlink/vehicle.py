@@ -73,6 +73,10 @@ STREAMS: tuple[tuple[int, float], ...] = (
 GCS_HEARTBEAT_MAX_HZ = 20.0
 #: Traffic kept while no tap is attached (beyond it, only counted).
 MAX_BUFFERED = 100_000
+#: A failsafe's mode must show in a HEARTBEAT within this (s) of its COMMAND_ACK.
+FAILSAFE_BOUND_S = 5.0
+#: STATUSTEXTs kept (the older half is dropped when full).
+MAX_TEXTS = 200
 
 _IGNORE_VELOCITY = (
     mavlink.POSITION_TARGET_TYPEMASK_VX_IGNORE
@@ -193,6 +197,11 @@ class MavlinkVehicle:
         #: When the current loss began (the last heartbeat before it), or None.
         self.lost_since: float | None = None
         self._failsafe_pending = False
+        #: A failsafe mode change not yet seen in a HEARTBEAT: (mode, heartbeats before
+        #: it, when it was acknowledged, deadline).
+        self._failsafe_watch: tuple[int, int, float, float] | None = None
+        #: Why the last failsafe was not confirmed ("" when it was, or none ran).
+        self.failsafe_problem = ""
         self._acks: list[MAVLinkMessage] = []
         self._commanded_mode: int | None = None
         self._yaw_target_ned: float | None = None
@@ -201,6 +210,10 @@ class MavlinkVehicle:
         self._last_gcs_heartbeat = -math.inf
         self._next_velocity = math.inf
         self._streams_requested = False
+        #: The autopilot's STATUSTEXTs: (our clock, severity, text), oldest first.
+        self.texts: list[tuple[float, int, str]] = []
+        #: Parameters read with `read_parameters` (PARAM_VALUE), by name.
+        self.parameters: dict[str, float] = {}
 
     # -- the tap -------------------------------------------------------------------------
     @property
@@ -294,6 +307,35 @@ class MavlinkVehicle:
             except VehicleCommandError as exc:
                 self._log(f"stream request not granted: {exc}")
 
+    def read_parameters(
+        self, names: tuple[str, ...], timeout: float = 2.0, min_sys_status: int = 0
+    ) -> dict[str, float]:
+        """Ask for `names` with PARAM_REQUEST_READ (again for the missing, every half
+        `timeout`) and wait for their PARAM_VALUEs, at most `timeout` s; what arrived.
+        Also waits (within `timeout`) for `min_sys_status` SYS_STATUS messages."""
+        target = self._require_link("PARAM_REQUEST_READ")
+        deadline = self._clock() + timeout
+        resend = -math.inf
+        while True:
+            missing = [n for n in names if n not in self.parameters]
+            if not missing and self.telemetry.sys_statuses >= min_sys_status:
+                break
+            now = self._clock()
+            if now >= deadline:
+                break
+            if missing and now >= resend:
+                resend = now + timeout / 2
+                for name in missing:
+                    self.link.send(
+                        mavlink.MAVLink_param_request_read_message(
+                            target[0], target[1], name.encode("ascii"), -1
+                        )
+                    )
+            check_interrupts()
+            self._process(self.link.poll(min(deadline - now, 0.05)))
+            self._service()
+        return {n: self.parameters[n] for n in names if n in self.parameters}
+
     def close(self) -> None:
         self.link.close()
 
@@ -328,6 +370,15 @@ class MavlinkVehicle:
         if self._failsafe_pending and not self.link_lost:
             self._failsafe_pending = False
             self._run_failsafe()
+        watch = self._failsafe_watch
+        if watch is not None and self._clock() > watch[3]:
+            self._failsafe_watch = None
+            self.failsafe_problem = (
+                f"failsafe {mode_name(watch[0])} not confirmed: the autopilot still says "
+                f"{self.telemetry.heard_mode_name} {FAILSAFE_BOUND_S:g} s after acknowledging it"
+            )
+            self._event("failsafe_unconfirmed", mode=mode_name(watch[0]))
+            self._log(self.failsafe_problem, "ERROR")
         limit = self.config.link_timeout
         if limit is not None and self.lost_since is not None:
             silent = self._clock() - self.lost_since
@@ -369,13 +420,34 @@ class MavlinkVehicle:
                 self._acks.append(msg)
             return
         if kind == "STATUSTEXT":
-            self._log(f"autopilot: {msg.format_attr('text')}", _severity(msg.severity))
+            text = msg.format_attr("text")
+            if len(self.texts) >= MAX_TEXTS:
+                del self.texts[: MAX_TEXTS // 2]
+            self.texts.append((self._clock(), int(msg.severity), text))
+            self._log(f"autopilot: {text}", _severity(msg.severity))
+            return
+        if kind == "PARAM_VALUE":
+            name = msg.format_attr("param_id")
+            if math.isfinite(msg.param_value):
+                self.parameters[name] = float(msg.param_value)
             return
         self.telemetry.apply(msg)
 
     def _heartbeat(self, item: Received) -> None:
         self.telemetry.apply(item.msg)
         self._last_heartbeat = self._clock()
+        watch = self._failsafe_watch
+        if (
+            watch is not None
+            and self.telemetry.heartbeats > watch[1]
+            and self.telemetry.heard_mode == watch[0]
+        ):
+            self._failsafe_watch = None
+            self._event(
+                "failsafe_seen",
+                mode=mode_name(watch[0]),
+                after_s=round(self._last_heartbeat - watch[2], 3),
+            )
         # Answer each autopilot heartbeat with ours (at most GCS_HEARTBEAT_MAX_HZ): an
         # autopilot that beats faster than 1 Hz runs faster than the wall clock (SITL
         # with a speed-up), and its GCS failsafe (FS_GCS_TIMEOUT) counts on its clock.
@@ -437,13 +509,20 @@ class MavlinkVehicle:
         if not self.telemetry.flying:
             self._event("failsafe", action="none", reason="not flying")
             return
+        self.failsafe_problem = ""
         try:
+            beats = self.telemetry.heartbeats
             if self.config.failsafe == "land":
                 self._set_mode(LAND)
             elif self.config.failsafe == "rtl":
                 self._set_mode(RTL)
             elif self.telemetry.custom_mode == GUIDED:
                 self._brake()
+            if self.config.failsafe != "hold" or self.telemetry.custom_mode == GUIDED:
+                # Acknowledged is not done: watch the HEARTBEATs for the mode.
+                now = self._clock()
+                mode = self.telemetry.custom_mode
+                self._failsafe_watch = (mode, beats, now, now + FAILSAFE_BOUND_S)
             # hold outside GUIDED: the autopilot's own failsafe (LAND, RTL) or a pilot
             # has the vehicle; a setpoint would be ignored, and taking over is not ours.
             self._event("failsafe", action=self.config.failsafe, mode=self.telemetry.mode)
@@ -479,6 +558,7 @@ class MavlinkVehicle:
         p = (*params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:7]
         attempts = 1 + (self.config.retries if retries is None else retries)
         self._acks.clear()
+        texts_before = len(self.texts)
         for attempt in range(attempts):
             self.link.send(
                 mavlink.MAVLink_command_long_message(
@@ -496,7 +576,9 @@ class MavlinkVehicle:
                     self._acks.clear()
                     if ack.result == mavlink.MAV_RESULT_ACCEPTED:
                         return ack
-                    raise VehicleCommandError(f"{name} refused: {result_name(ack.result)}")
+                    said = "; ".join(t for _, _, t in self.texts[texts_before:])
+                    because = f" (autopilot: {said})" if said else ""
+                    raise VehicleCommandError(f"{name} refused: {result_name(ack.result)}{because}")
                 self._acks.clear()
                 remaining = deadline - self._clock()
                 if remaining <= 0:
@@ -635,8 +717,9 @@ class MavlinkVehicle:
 
     @property
     def down(self) -> bool:
-        """Landed and disarmed, as last heard."""
-        return not self.telemetry.flying and not self.telemetry.armed
+        """Landed and disarmed, as the autopilot last said (EXTENDED_SYS_STATE and its
+        HEARTBEAT: never assumed from a command sent)."""
+        return not self.telemetry.flying and not self.telemetry.heard_armed
 
     def bring_down(self) -> str:
         """LAND, unless the autopilot is already landing or returning; what was done."""
@@ -655,6 +738,13 @@ class MavlinkVehicle:
         self._require_link("return")
         self._set_mode(RTL)
         return "switched to RTL"
+
+    def switch_mode(self, mode: int) -> None:
+        """Switch to `mode` (acknowledged; the HEARTBEAT shows it later): for an ending
+        (BRAKE before a landing)."""
+        self._velocity_ned = None
+        self._require_link(mode_name(mode))
+        self._set_mode(mode)
 
     def hold_here(self) -> str:
         """Brake and hold in GUIDED; in any other mode the autopilot keeps what it does."""
