@@ -278,7 +278,7 @@ class _CatalogReader:
         return None
 
     def seconds(self, node: YNode, what: str, *subjects: str) -> float | None:
-        value = _as_float(node.value)
+        value = as_float(node.value)
         if value is not None and 0 < value <= MAX_TIMEOUT_S:
             return value
         if value is not None and value > MAX_TIMEOUT_S:
@@ -573,7 +573,7 @@ class _CatalogReader:
                 return malformed(
                     f"a numeric range is [min, max], got {len(values)} numbers", allowed.mark
                 )
-            low, high = _as_float(values[0]), _as_float(values[1])
+            low, high = as_float(values[0]), as_float(values[1])
             if low is None or high is None:
                 return malformed("a range bound is NaN or too large for a float", allowed.mark)
             if low > high:
@@ -676,7 +676,7 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _as_float(value: Any) -> float | None:
+def as_float(value: Any) -> float | None:
     """A YAML number as a float; None for non-numbers, NaN (it compares false with
     everything, so every value would be "outside") and ints beyond float range."""
     if not _is_number(value):
