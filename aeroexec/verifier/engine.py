@@ -11,7 +11,6 @@ with missions, the task rules with a task catalog, the witness runs with behavio
 
 from __future__ import annotations
 
-import glob
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -23,6 +22,7 @@ from aeroexec.catalog.tasks import TaskCatalog
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.executive.behavior import Behavior
 from aeroexec.gc_pause import paused_gc
+from aeroexec.inputs import glob_files, has_magic
 from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
@@ -36,21 +36,26 @@ CatalogInput = str | Path | Catalog | TaskCatalog
 Library = Mapping[str, type[Behavior]]
 
 
-def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
+def expand_catalog_paths(patterns: Iterable[str | Path]) -> tuple[list[str], list[CatalogError]]:
     """Catalog paths as given; glob patterns that name no existing file (quoted on the
-    command line, or on Windows) are expanded here. `CatalogError` for a pattern that
-    matches nothing; a plain missing path is left for the loader to report."""
+    command line, or on Windows) are expanded here (`**` recursive). Beside the paths,
+    the errors met: a pattern that matches nothing, a directory the search could not
+    read (it would otherwise look like "no match", or drop catalogs from the check in
+    silence), a match that is a symlink loop. A plain missing path is left for the
+    loader to report."""
     result: list[str] = []
+    errors: list[CatalogError] = []
     for pattern in patterns:
         text = str(pattern)
-        if not glob.has_magic(text) or _exists(text):
+        if not has_magic(text) or _exists(text):
             result.append(text)
             continue
-        matches = sorted(glob.glob(text, recursive=True))
-        if not matches:
-            raise CatalogError("no catalog matches this pattern", Mark(text))
-        result.extend(matches)
-    return result
+        found = glob_files(text)
+        errors.extend(CatalogError(u.problem, Mark(u.path)) for u in found.unreadable)
+        if not found.files and not found.unreadable:
+            errors.append(CatalogError("no catalog matches this pattern", Mark(text)))
+        result.extend(found.files)
+    return result, errors
 
 
 def _exists(path: str) -> bool:
@@ -141,11 +146,8 @@ def _read_catalogs(sources: Sequence[CatalogInput], errors: list[InputError]) ->
         if isinstance(source, (Catalog, TaskCatalog)):
             loaded.append(source)
             continue
-        try:
-            paths = expand_catalog_paths([source])
-        except AeroexecError as exc:
-            errors.append(InputError.of(exc, str(source)))
-            continue
+        paths, unreadable = expand_catalog_paths([source])
+        errors.extend(InputError.of(exc) for exc in unreadable)
         for path in paths:
             interrupts.check()
             try:
@@ -164,11 +166,8 @@ def _read_missions(
 
     scripts = [m for m in sources if isinstance(m, MissionScript)]
     for pattern in (m for m in sources if not isinstance(m, MissionScript)):
-        try:
-            paths = expand_mission_paths([pattern])
-        except AeroexecError as exc:
-            errors.append(InputError.of(exc, str(pattern)))
-            continue
+        paths, unreadable = expand_mission_paths([pattern])
+        errors.extend(InputError.of(exc) for exc in unreadable)
         for path in paths:
             interrupts.check()
             try:
