@@ -8,7 +8,7 @@ never O(catalog).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -20,6 +20,53 @@ DEFAULT_TIMEOUT_S = 15.0
 MAX_TIMEOUT_S = (2**63 - 1) / 1e9
 #: The mark of entries built in code rather than read from a file.
 IN_MEMORY = Mark("<memory>")
+
+
+class Marks(Mapping[str, Mark]):
+    """The marks of an entry's fields (`timeout`) and of the items of its name lists
+    (`incompatible_lists.3`), read as one mapping.
+
+    Each list's marks are kept as one tuple, not under a string key per item: a key per
+    name cost a hundred bytes more for every name of a list a million names long (a
+    hostile catalog's worst case, within the input size cap).
+    """
+
+    __slots__ = ("_fields", "_items")
+
+    def __init__(
+        self,
+        fields: Mapping[str, Mark] | None = None,
+        items: Mapping[str, tuple[Mark, ...]] | None = None,
+    ) -> None:
+        self._fields = dict(fields or {})
+        self._items = dict(items or {})
+
+    def __getitem__(self, key: str) -> Mark:
+        mark = self._fields.get(key)
+        if mark is not None:
+            return mark
+        head, dot, index = key.rpartition(".")
+        marks = self._items.get(head) if dot else None
+        if marks is not None and index.isascii() and index.isdigit() and int(index) < len(marks):
+            return marks[int(index)]
+        raise KeyError(key)
+
+    def __iter__(self) -> Iterator[str]:
+        yield from self._fields
+        for head, marks in self._items.items():
+            yield from (f"{head}.{i}" for i in range(len(marks)))
+
+    def __len__(self) -> int:
+        return len(self._fields) + sum(len(marks) for marks in self._items.values())
+
+    def __getstate__(self) -> tuple[dict[str, Mark], dict[str, tuple[Mark, ...]]]:
+        return self._fields, self._items
+
+    def __setstate__(self, state: tuple[dict[str, Mark], dict[str, tuple[Mark, ...]]]) -> None:
+        self._fields, self._items = state
+
+    def __repr__(self) -> str:
+        return f"Marks({dict(self)!r})"
 
 
 class Severity(str, Enum):

@@ -44,6 +44,9 @@ DEFAULT_NODE_BUDGET = 5_000_000
 MAX_DEPTH = 200
 
 
+_NO_KEY_MARKS: dict[str, Mark] = {}
+
+
 class YNode:
     """A YAML value with its mark. `value` is dict[str, YNode], list[YNode] or a scalar.
 
@@ -64,7 +67,9 @@ class YNode:
     ) -> None:
         self.value = value
         self.mark = mark
-        self.key_marks: dict[str, Mark] = {} if key_marks is None else key_marks
+        # One shared empty dict for every scalar and list (never written: instances are
+        # immutable), not one each: 64 bytes per node of a million-item list.
+        self.key_marks: dict[str, Mark] = _NO_KEY_MARKS if key_marks is None else key_marks
         self.duplicate_keys = duplicate_keys
         #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
         #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and

@@ -38,7 +38,9 @@ functions and API aliases are folded, every call is checked against each behavio
 catalog, and the calls are run as sequences, path by path, in the executive (preempted
 inhibits, capability conflicts, flight state, behaviors left running). An input that
 cannot be read is reported (one line on stderr, and in the json/sarif/github output)
-and the others are verified all the same; the exit code is then 2.
+and the others are verified all the same; the exit code is then 2. Text and github
+output list at most --max-findings (100) findings per rule, then "... and N more";
+json and sarif list them all, and every finding counts in the summary and exit code.
 
 When the project declares its behaviors (-b/--behaviors, `behaviors` in
 [tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
@@ -56,11 +58,17 @@ Examples:
   aeroexec verify my-catalog.yaml -b mybehaviors
   aeroexec verify --list-rules
   aeroexec verify --explain AX304
+  aeroexec verify huge.yaml --max-findings 0   # every finding, however many
 
 \b
 Exit codes: 0 no errors; 1 errors (or warnings with --strict);
             2 an input could not be read (one line each on stderr).
 """
+
+
+#: Findings of one rule listed in text output before "... and N more": a screenful or
+#: two, enough to see the pattern of a systematic mistake.
+DEFAULT_MAX_FINDINGS = 100
 
 
 class VerifyFormat(str, Enum):
@@ -121,6 +129,14 @@ def verify_command(
         help="List every rule (code, severity, name, by area) and exit; with -f json, "
         "their documentation too.",
     ),
+    max_findings: int = typer.Option(
+        DEFAULT_MAX_FINDINGS,
+        "--max-findings",
+        metavar="N",
+        min=0,
+        help="List at most N findings of each rule in text and github output, then "
+        "'... and M more' (all are counted; json and sarif list them all); 0: no limit.",
+    ),
     color: Color = color_option(),
     behaviors: BehaviorsOption = None,
 ) -> None:
@@ -146,7 +162,16 @@ def verify_command(
     found = project_behaviors(behaviors, settings)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
-    report = verify(catalogs, mission, world=limits, behaviors=found if found.declared else None)
+    # json and sarif are read by programs: every finding. Text and annotations are read
+    # by people, who do not read a million lines of one rule.
+    limit = max_findings if fmt in ("text", "github") and max_findings > 0 else None
+    report = verify(
+        catalogs,
+        mission,
+        world=limits,
+        behaviors=found if found.declared else None,
+        max_findings=limit,
+    )
     shown = report.at_least(threshold)
     styled = use_color(color)
     text = render(shown, fmt, witness=witness, color=styled)

@@ -11,7 +11,8 @@ with missions, the task rules with a task catalog, the witness runs with behavio
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+import itertools
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -24,7 +25,7 @@ from aeroexec.executive.behavior import Behavior
 from aeroexec.gc_pause import paused_gc
 from aeroexec.inputs import glob_files, has_magic
 from aeroexec.vehicles.world import World
-from aeroexec.verifier.findings import Finding, InputError, Report
+from aeroexec.verifier.findings import Finding, FindingCollector, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
 
@@ -81,40 +82,66 @@ def check_catalog(
     `behaviors`, else the standard library). With `behaviors` (the implementations the
     project runs), the catalog is checked against them too (AX9xx).
     """
+    return list(
+        iter_catalog_findings(catalog, codes, world=world, library=library, behaviors=behaviors)
+    )
+
+
+def iter_catalog_findings(
+    catalog: Catalog,
+    codes: Iterable[str] | None = None,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
+    behaviors: BehaviorSet | None = None,
+) -> Iterator[Finding]:
+    """`check_catalog`, one finding at a time: a caller that keeps only some of them
+    (`FindingCollector`) never holds them all."""
     wanted = None if codes is None else set(codes)
-    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
     if library is None and behaviors is not None:
         library = behaviors.library()
-    graphs = CatalogGraphs(catalog, world, library)
-    for rule in catalog_checks():
-        if wanted is not None and rule.code not in wanted:
-            continue
-        assert rule.check is not None
-        findings.extend(rule.check(graphs))  # type: ignore[call-arg]  (a catalog rule)
+    realized = None
     if behaviors is not None:
-        for rule in code_checks():
-            if wanted is None or rule.code in wanted:
-                findings.extend(rule.check(graphs, behaviors))  # type: ignore[call-arg]
         # Witnesses as the real behaviors make them happen (TAKE_OFF first, ...).
         from aeroexec.verifier.witness_run import realize_findings
 
-        findings = realize_findings(catalog, findings, behaviors.library())
-    return findings
+        code_library = behaviors.library()
+        realized = lambda found: realize_findings(catalog, [found], code_library)[0]  # noqa: E731
+    findings: Iterator[Finding] = (Finding.from_diagnostic(d) for d in catalog.diagnostics)
+    graphs = CatalogGraphs(catalog, world, library)
+    rules = [r for r in catalog_checks() if wanted is None or r.code in wanted]
+    findings = itertools.chain(
+        findings,
+        *(rule.check(graphs) for rule in rules),  # type: ignore[call-arg]  (catalog rules)
+    )
+    if behaviors is not None:
+        code_rules = [r for r in code_checks() if wanted is None or r.code in wanted]
+        findings = itertools.chain(
+            findings,
+            *(rule.check(graphs, behaviors) for rule in code_rules),  # type: ignore[call-arg]
+        )
+    for finding in findings:
+        yield finding if realized is None else realized(finding)
 
 
 def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None) -> list[Finding]:
     """The task loader's diagnostics plus every task rule's findings (unsorted)."""
+    return list(iter_task_findings(catalog, codes))
+
+
+def iter_task_findings(
+    catalog: TaskCatalog, codes: Iterable[str] | None = None
+) -> Iterator[Finding]:
     from aeroexec.verifier.task_rules import TaskContext
 
     wanted = None if codes is None else set(codes)
-    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
+    yield from (Finding.from_diagnostic(d) for d in catalog.diagnostics)
     context = TaskContext(catalog)
     for rule in task_checks():
         if wanted is not None and rule.code not in wanted:
             continue
         assert rule.check is not None
-        findings.extend(rule.check(context))  # type: ignore[arg-type]
-    return findings
+        yield from rule.check(context)  # type: ignore[arg-type]
 
 
 def check_any_catalog(
@@ -124,9 +151,19 @@ def check_any_catalog(
     library: Library | None = None,
     behaviors: BehaviorSet | None = None,
 ) -> list[Finding]:
+    return list(iter_any_findings(catalog, world=world, library=library, behaviors=behaviors))
+
+
+def iter_any_findings(
+    catalog: AnyCatalog,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
+    behaviors: BehaviorSet | None = None,
+) -> Iterator[Finding]:
     if isinstance(catalog, TaskCatalog):
-        return check_task_catalog(catalog)
-    return check_catalog(catalog, world=world, library=library, behaviors=behaviors)
+        return iter_task_findings(catalog)
+    return iter_catalog_findings(catalog, world=world, library=library, behaviors=behaviors)
 
 
 def verify_catalog(catalog: AnyCatalog) -> Report:
@@ -184,6 +221,7 @@ def verify(
     world: World | None = None,
     library: Library | None = None,
     behaviors: BehaviorSet | None = None,
+    max_findings: int | None = None,
 ) -> Report:
     """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
     the mission scripts (paths, glob patterns or parsed scripts) that use them; every
@@ -193,12 +231,14 @@ def verify(
     An input that cannot be read becomes an `InputError` of the report (exit code 2)
     and the rest are verified all the same. `world` (the vehicle's limits) and `library`
     (the behavior implementations, for their declared situations and destinations)
-    default to the built-in world and the standard library.
+    default to the built-in world and the standard library. With `max_findings`, the
+    report keeps the first that many findings of each rule (by place) and counts the
+    rest (`Report.omitted`): memory stays bounded however many a catalog has.
     """
     # The rules build graphs and indexes as large as the catalog: no cyclic garbage
     # worth the collector's passes over everything already loaded.
     with paused_gc():
-        return _verify(catalogs, missions, world, library, behaviors)
+        return _verify(catalogs, missions, world, library, behaviors, max_findings)
 
 
 def _verify(
@@ -207,18 +247,19 @@ def _verify(
     world: World | None,
     library: Library | None,
     behaviors: BehaviorSet | None,
+    max_findings: int | None,
 ) -> Report:
     if library is None and behaviors is not None:
         library = behaviors.library()
     errors: list[InputError] = []
     loaded = _read_catalogs(catalogs, errors)
     scripts = _read_missions(missions, errors)
-    findings: list[Finding] = []
+    findings = FindingCollector(max_findings)
     behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
         interrupts.check()
         findings.extend(
-            check_any_catalog(catalog, world=world, library=library, behaviors=behaviors)
+            iter_any_findings(catalog, world=world, library=library, behaviors=behaviors)
         )
     # Missions use the behavior API (execute/activate/inhibit_behavior): they are
     # checked against the behavior catalogs.
@@ -229,8 +270,9 @@ def _verify(
         for script in scripts:
             findings.extend(check_mission(script, catalog, note, library=library, world=world))
     return Report(
-        tuple(findings),
+        findings.findings(),
         catalogs=tuple(c.source for c in loaded),
         missions=tuple(s.path for s in scripts),
         input_errors=tuple(errors),
+        omitted=findings.omitted(),
     )

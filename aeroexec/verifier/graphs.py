@@ -378,11 +378,15 @@ class CatalogGraphs:
     # -- lists and preemption ------------------------------------------------------------
     @cached_property
     def list_namers(self) -> dict[str, tuple[str, ...]]:
-        """List -> behaviors (catalog order) that name it in incompatible_lists."""
+        """Defined list -> behaviors (catalog order) that name it in incompatible_lists.
+        Undefined names are left out: a hostile catalog names a million of them, each an
+        entry here for nothing (AX201 reports them from the descriptors)."""
+        lists = self.catalog.lists
         result: dict[str, list[str]] = {}
         for name, behavior in self.catalog.behaviors.items():
             for list_name in dict.fromkeys(behavior.incompatible_lists):
-                result.setdefault(list_name, []).append(name)
+                if list_name in lists:
+                    result.setdefault(list_name, []).append(name)
         return {k: tuple(v) for k, v in result.items()}
 
     def preempts(self, a: str, b: str) -> bool:
