@@ -12,7 +12,7 @@ from __future__ import annotations
 import difflib
 import math
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -28,6 +28,7 @@ from aeroexec.catalog.model import (
     Catalog,
     Diagnostic,
     Marks,
+    PackedMarks,
     Severity,
 )
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
@@ -158,7 +159,7 @@ class NameRefs(NamedTuple):
     """A list of names as read, and where each was written."""
 
     names: tuple[str, ...]
-    marks: tuple[Mark, ...]
+    marks: Sequence[Mark]
 
 
 NO_NAMES = NameRefs((), ())
@@ -271,16 +272,17 @@ class _CatalogReader:
                 node.mark,
                 *subjects,
             )
-        # Two parallel tuples, not a (name, mark) pair per item: 64 bytes less for each
-        # name of a list a million names long.
+        # The names, and their marks packed (not a (name, Mark) pair per item): a list
+        # a million names long costs the names and eight bytes each.
         names: list[str] = []
-        marks: list[Mark] = []
+        marks = PackedMarks(node.file)
         for item in items:
             name = self.name_of(item, f"an entry of {what}", *subjects)
             if name is not None:
                 names.append(name)
-                marks.append(item.mark)
-        return NameRefs(tuple(names), tuple(marks))
+                marks.lines.append(item.line)
+                marks.columns.append(item.column)
+        return NameRefs(tuple(names), marks)
 
     def boolean(self, node: YNode, what: str, *subjects: str) -> bool | None:
         value = node.value

@@ -8,9 +8,11 @@ never O(catalog).
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from array import array
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import overload
 
 from aeroexec.errors import Mark, one_line
 
@@ -20,6 +22,31 @@ DEFAULT_TIMEOUT_S = 15.0
 MAX_TIMEOUT_S = (2**63 - 1) / 1e9
 #: The mark of entries built in code rather than read from a file.
 IN_MEMORY = Mark("<memory>")
+
+
+@dataclass(frozen=True, slots=True)
+class PackedMarks(Sequence[Mark]):
+    """The marks of the items of one list, all in one file, as two arrays of numbers:
+    eight bytes an item instead of a `Mark` object and its column's int (about 90).
+    (Unsigned 32 bits: the input cap, 16 MB, keeps lines and columns far below.)"""
+
+    file: str
+    lines: array[int] = field(default_factory=lambda: array("I"))
+    columns: array[int] = field(default_factory=lambda: array("I"))
+
+    def __len__(self) -> int:
+        return len(self.lines)
+
+    @overload
+    def __getitem__(self, index: int) -> Mark: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[Mark]: ...
+
+    def __getitem__(self, index: int | slice) -> Mark | Sequence[Mark]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        return Mark(self.file, self.lines[index], self.columns[index])
 
 
 class Marks(Mapping[str, Mark]):
@@ -36,7 +63,7 @@ class Marks(Mapping[str, Mark]):
     def __init__(
         self,
         fields: Mapping[str, Mark] | None = None,
-        items: Mapping[str, tuple[Mark, ...]] | None = None,
+        items: Mapping[str, Sequence[Mark]] | None = None,
     ) -> None:
         self._fields = dict(fields or {})
         self._items = dict(items or {})
@@ -59,10 +86,10 @@ class Marks(Mapping[str, Mark]):
     def __len__(self) -> int:
         return len(self._fields) + sum(len(marks) for marks in self._items.values())
 
-    def __getstate__(self) -> tuple[dict[str, Mark], dict[str, tuple[Mark, ...]]]:
+    def __getstate__(self) -> tuple[dict[str, Mark], dict[str, Sequence[Mark]]]:
         return self._fields, self._items
 
-    def __setstate__(self, state: tuple[dict[str, Mark], dict[str, tuple[Mark, ...]]]) -> None:
+    def __setstate__(self, state: tuple[dict[str, Mark], dict[str, Sequence[Mark]]]) -> None:
         self._fields, self._items = state
 
     def __repr__(self) -> str:

@@ -53,9 +53,39 @@ class YNode:
     A plain slotted class rather than a frozen dataclass: a large catalog builds hundreds
     of thousands of them, and a frozen dataclass's `__init__` costs four times as much.
     Treat instances as immutable.
+
+    Most nodes are scalars in lists, so a node holds only what every node has; what
+    only some have lives in subclasses that `YNode(...)` picks: a mapping's key marks
+    and duplicate keys (`_YMapping`), a boolean's own text (`_YWord`). The others read
+    the class defaults. (A list a million names long is a million nodes: each slot less
+    is 8 MB less.)
     """
 
-    __slots__ = ("duplicate_keys", "key_marks", "mark", "raw", "value")
+    __slots__ = ("column", "file", "line", "value")
+
+    #: Mark of each key of a mapping (an empty dict, shared, for other nodes).
+    key_marks: dict[str, Mark] = _NO_KEY_MARKS
+    #: Keys written twice in a mapping, with the mark of the repetition.
+    duplicate_keys: tuple[tuple[str, Mark], ...] = ()
+    #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
+    #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and compare
+    #: them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
+    raw: str | None = None
+
+    def __new__(
+        cls,
+        value: Any,
+        mark: Mark,
+        key_marks: dict[str, Mark] | None = None,
+        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
+        raw: str | None = None,
+    ) -> YNode:
+        if cls is YNode:
+            if key_marks is not None or duplicate_keys:
+                cls = _YMapping
+            elif raw is not None:
+                cls = _YWord
+        return object.__new__(cls)
 
     def __init__(
         self,
@@ -66,15 +96,10 @@ class YNode:
         raw: str | None = None,
     ) -> None:
         self.value = value
-        self.mark = mark
-        # One shared empty dict for every scalar and list (never written: instances are
-        # immutable), not one each: 64 bytes per node of a million-item list.
-        self.key_marks: dict[str, Mark] = _NO_KEY_MARKS if key_marks is None else key_marks
-        self.duplicate_keys = duplicate_keys
-        #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
-        #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and
-        #: compare them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
-        self.raw = raw
+        # The mark's parts, not the Mark: one object less per node; `mark` builds it.
+        self.file = mark.file
+        self.line = mark.line
+        self.column = mark.column
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, YNode):
@@ -89,6 +114,10 @@ class YNode:
 
     def __repr__(self) -> str:
         return f"YNode(value={self.value!r}, mark={self.mark!r})"
+
+    @property
+    def mark(self) -> Mark:
+        return Mark(self.file, self.line, self.column)
 
     @property
     def text(self) -> Any:
@@ -116,6 +145,41 @@ class YNode:
         if isinstance(self.value, list):
             return [v.plain() for v in self.value]
         return self.value
+
+
+class _YMapping(YNode):
+    """A mapping's node: with its keys' marks and repeated keys."""
+
+    __slots__ = ("duplicate_keys", "key_marks")
+
+    def __init__(
+        self,
+        value: Any,
+        mark: Mark,
+        key_marks: dict[str, Mark] | None = None,
+        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
+        raw: str | None = None,
+    ) -> None:
+        super().__init__(value, mark)
+        self.key_marks = {} if key_marks is None else key_marks
+        self.duplicate_keys = duplicate_keys
+
+
+class _YWord(YNode):
+    """A scalar YAML 1.1 read as a boolean, with the text it was written as."""
+
+    __slots__ = ("raw",)
+
+    def __init__(
+        self,
+        value: Any,
+        mark: Mark,
+        key_marks: dict[str, Mark] | None = None,
+        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
+        raw: str | None = None,
+    ) -> None:
+        super().__init__(value, mark)
+        self.raw = raw
 
 
 def _mark(file: str, mark: Any) -> Mark:

@@ -384,8 +384,11 @@ class CatalogGraphs:
         lists = self.catalog.lists
         result: dict[str, list[str]] = {}
         for name, behavior in self.catalog.behaviors.items():
-            for list_name in dict.fromkeys(behavior.incompatible_lists):
-                if list_name in lists:
+            # Deduplicated among the defined lists only: no set of every name written.
+            named = {n for n in behavior.incompatible_lists if n in lists}
+            for list_name in behavior.incompatible_lists:
+                if list_name in named:
+                    named.discard(list_name)
                     result.setdefault(list_name, []).append(name)
         return {k: tuple(v) for k, v in result.items()}
 

@@ -218,8 +218,10 @@ def dead_list(graphs: CatalogGraphs) -> Iterator[Finding]:
                     misspelt[close] = name
     wrong_namers: dict[str, list[str]] = {wrong: [] for wrong in misspelt.values()}
     for behavior_name, behavior in graphs.catalog.behaviors.items():
-        for name in dict.fromkeys(behavior.incompatible_lists):
-            if name in wrong_namers:
+        named = {n for n in behavior.incompatible_lists if n in wrong_namers}
+        for name in behavior.incompatible_lists:
+            if name in named:
+                named.discard(name)
                 wrong_namers[name].append(behavior_name)
     for name in dead:
         lst = lists[name]
