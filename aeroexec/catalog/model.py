@@ -44,9 +44,10 @@ class PackedMarks(Sequence[Mark]):
     def __getitem__(self, index: slice) -> Sequence[Mark]: ...
 
     def __getitem__(self, index: int | slice) -> Mark | Sequence[Mark]:
-        if isinstance(index, slice):
-            return [self[i] for i in range(*index.indices(len(self)))]
-        return Mark(self.file, self.lines[index], self.columns[index])
+        if index.__class__ is int:
+            return Mark(self.file, self.lines[index], self.columns[index])  # type: ignore[index]
+        assert isinstance(index, slice)
+        return [self[i] for i in range(*index.indices(len(self)))]
 
 
 class Marks(Mapping[str, Mark]):
@@ -69,14 +70,39 @@ class Marks(Mapping[str, Mark]):
         self._items = dict(items or {})
 
     def __getitem__(self, key: str) -> Mark:
+        mark = self.get(key)
+        if mark is None:
+            raise KeyError(key)
+        return mark
+
+    @overload
+    def get(self, key: str, /) -> Mark | None: ...
+
+    @overload
+    def get(self, key: str, /, default: Mark) -> Mark: ...
+
+    def get(self, key: str, /, default: Mark | None = None) -> Mark | None:
+        # Without Mapping.get's KeyError round trip: rules ask for the mark of every
+        # item of a list a million names long.
         mark = self._fields.get(key)
         if mark is not None:
             return mark
         head, dot, index = key.rpartition(".")
-        marks = self._items.get(head) if dot else None
-        if marks is not None and index.isascii() and index.isdigit() and int(index) < len(marks):
-            return marks[int(index)]
-        raise KeyError(key)
+        if dot and index.isdigit() and index.isascii():
+            marks = self._items.get(head)
+            if marks is not None:
+                position = int(index)
+                if position < len(marks):
+                    return marks[position]
+        return default
+
+    def item(self, field: str, index: int, default: Mark) -> Mark:
+        """The mark of item `index` of list `field` (else `default`): `get` without
+        writing and parsing the key."""
+        marks = self._items.get(field)
+        if marks is not None and 0 <= index < len(marks):
+            return marks[index]
+        return self._fields.get(f"{field}.{index}", default)
 
     def __iter__(self) -> Iterator[str]:
         yield from self._fields
@@ -94,6 +120,13 @@ class Marks(Mapping[str, Mark]):
 
     def __repr__(self) -> str:
         return f"Marks({dict(self)!r})"
+
+
+def item_mark(marks: Mapping[str, Mark], field: str, index: int, default: Mark) -> Mark:
+    """The mark of item `index` of the list `field` in `marks`, else `default`."""
+    if marks.__class__ is Marks:
+        return marks.item(field, index, default)  # type: ignore[attr-defined]
+    return marks.get(f"{field}.{index}", default)
 
 
 class Severity(str, Enum):
@@ -174,6 +207,10 @@ class BehaviorDescriptor:
     def mark_of(self, key: str) -> Mark:
         return self.marks.get(key, self.mark)
 
+    def item_mark(self, field: str, index: int) -> Mark:
+        """`mark_of(f"{field}.{index}")`, for the rules' loops over every item."""
+        return item_mark(self.marks, field, index, self.mark)
+
 
 @dataclass(frozen=True, slots=True)
 class BehaviorList:
@@ -184,6 +221,10 @@ class BehaviorList:
 
     def mark_of(self, key: str) -> Mark:
         return self.marks.get(key, self.mark)
+
+    def item_mark(self, field: str, index: int) -> Mark:
+        """`mark_of(f"{field}.{index}")`, for the rules' loops over every item."""
+        return item_mark(self.marks, field, index, self.mark)
 
 
 @dataclass(frozen=True, slots=True)
@@ -198,6 +239,10 @@ class CapabilityDescriptor:
 
     def mark_of(self, key: str) -> Mark:
         return self.marks.get(key, self.mark)
+
+    def item_mark(self, field: str, index: int) -> Mark:
+        """`mark_of(f"{field}.{index}")`, for the rules' loops over every item."""
+        return item_mark(self.marks, field, index, self.mark)
 
 
 @dataclass(frozen=True, eq=False)

@@ -35,10 +35,14 @@ _SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
 _SEQ_TAG = _CORE + "seq"
 _MAP_TAG = _CORE + "map"
 _MERGE_TAG = _CORE + "merge"
-#: Nodes visited per document, aliases counted each time they are followed. Large enough
-#: for a 100,000-entry catalog, small enough that a "billion laughs" stops in milliseconds
-#: (an alias costs the size of what it names, computed once, not a walk of it).
-DEFAULT_NODE_BUDGET = 5_000_000
+#: Nodes visited per document, aliases counted each time they are followed. Above what
+#: the input cap (16 MB, aeroexec.inputs.TEXT_LIMIT) admits of any real catalog (about
+#: 95,000 nodes per MB: 1.6 million) or of the hostile one of issue 23 (1.8 million
+#: distinct list names), below what a list of one-letter names could pack into 16 MB
+#: (8 million, at ~130 bytes of memory each), so that verify stays under 500 MB; and a
+#: "billion laughs" stops in milliseconds (an alias costs the size of what it names,
+#: computed once, not a walk of it). benchmarks/verify_hostile.py measures both ends.
+DEFAULT_NODE_BUDGET = 2_500_000
 #: A catalog is 6 levels deep; the limit keeps recursive consumers of `YNode`
 #: (`plain()`, `==`) far from Python's recursion limit.
 MAX_DEPTH = 200

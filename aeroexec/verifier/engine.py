@@ -12,7 +12,7 @@ with missions, the task rules with a task catalog, the witness runs with behavio
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -100,13 +100,16 @@ def iter_catalog_findings(
     wanted = None if codes is None else set(codes)
     if library is None and behaviors is not None:
         library = behaviors.library()
-    realized = None
+    realized: Callable[[Finding], Finding] | None = None
     if behaviors is not None:
         # Witnesses as the real behaviors make them happen (TAKE_OFF first, ...).
         from aeroexec.verifier.witness_run import realize_findings
 
         code_library = behaviors.library()
-        realized = lambda found: realize_findings(catalog, [found], code_library)[0]  # noqa: E731
+
+        def realized(found: Finding) -> Finding:
+            return realize_findings(catalog, [found], code_library)[0]
+
     findings: Iterator[Finding] = (Finding.from_diagnostic(d) for d in catalog.diagnostics)
     graphs = CatalogGraphs(catalog, world, library)
     rules = [r for r in catalog_checks() if wanted is None or r.code in wanted]

@@ -254,6 +254,7 @@ class FindingCollector:
         if limit is not None and limit < 0:
             raise ValueError("limit must be >= 0 or None")
         self.limit = limit
+        self._room = 0 if limit is None else max(4 * limit, 4096)
         self._all: list[Finding] = []
         self._kept: dict[str, list[Finding]] = {}
         self._seen: dict[tuple[str, Severity], int] = {}
@@ -266,7 +267,7 @@ class FindingCollector:
         self._seen[key] = self._seen.get(key, 0) + 1
         kept = self._kept.setdefault(finding.rule, [])
         kept.append(finding)
-        if len(kept) >= max(4 * self.limit, 4096):
+        if len(kept) >= self._room:
             kept.sort(key=Finding.sort_key)
             del kept[self.limit :]
 
