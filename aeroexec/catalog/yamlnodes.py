@@ -59,7 +59,7 @@ class YNode:
     Treat instances as immutable.
 
     Most nodes are scalars in lists, so a node holds only what every node has; what
-    only some have lives in subclasses that `YNode(...)` picks: a mapping's key marks
+    only some have lives in subclasses (`YNode.at` makes the right one): a mapping's key marks
     and duplicate keys (`_YMapping`), a boolean's own text (`_YWord`). The others read
     the class defaults. (A list a million names long is a million nodes: each slot less
     is 8 MB less.)
@@ -76,34 +76,27 @@ class YNode:
     #: them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
     raw: str | None = None
 
-    def __new__(
-        cls,
+    def __init__(self, value: Any, mark: Mark) -> None:
+        self.value = value
+        # The mark's parts, not the Mark: one object less per node; `mark` builds it.
+        self.file = mark.file
+        self.line = mark.line
+        self.column = mark.column
+
+    @staticmethod
+    def at(
         value: Any,
         mark: Mark,
         key_marks: dict[str, Mark] | None = None,
         duplicate_keys: tuple[tuple[str, Mark], ...] = (),
         raw: str | None = None,
     ) -> YNode:
-        if cls is YNode:
-            if key_marks is not None or duplicate_keys:
-                cls = _YMapping
-            elif raw is not None:
-                cls = _YWord
-        return object.__new__(cls)
-
-    def __init__(
-        self,
-        value: Any,
-        mark: Mark,
-        key_marks: dict[str, Mark] | None = None,
-        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
-        raw: str | None = None,
-    ) -> None:
-        self.value = value
-        # The mark's parts, not the Mark: one object less per node; `mark` builds it.
-        self.file = mark.file
-        self.line = mark.line
-        self.column = mark.column
+        """A node of the class its extras need (a mapping's keys, a boolean's text)."""
+        if key_marks is not None or duplicate_keys:
+            return _YMapping(value, mark, key_marks, duplicate_keys)
+        if raw is not None:
+            return _YWord(value, mark, raw)
+        return YNode(value, mark)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, YNode):
@@ -162,7 +155,6 @@ class _YMapping(YNode):
         mark: Mark,
         key_marks: dict[str, Mark] | None = None,
         duplicate_keys: tuple[tuple[str, Mark], ...] = (),
-        raw: str | None = None,
     ) -> None:
         super().__init__(value, mark)
         self.key_marks = {} if key_marks is None else key_marks
@@ -174,14 +166,7 @@ class _YWord(YNode):
 
     __slots__ = ("raw",)
 
-    def __init__(
-        self,
-        value: Any,
-        mark: Mark,
-        key_marks: dict[str, Mark] | None = None,
-        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
-        raw: str | None = None,
-    ) -> None:
+    def __init__(self, value: Any, mark: Mark, raw: str | None = None) -> None:
         super().__init__(value, mark)
         self.raw = raw
 
@@ -208,7 +193,7 @@ class _Open:
     def close(self) -> YNode:
         if not self.mapping:
             return YNode(self.items, self.mark)
-        return YNode(self.items, self.mark, self.key_marks, tuple(self.duplicates))
+        return _YMapping(self.items, self.mark, self.key_marks, tuple(self.duplicates))
 
 
 class _Builder:
@@ -283,8 +268,10 @@ class _Builder:
                 else:
                     key = (event.tag, text, event.implicit)
                     value = scalars[key] if key in scalars else self.scalar(event, mark)
-                node = YNode(
-                    value, mark, None, (), event.value if value is True or value is False else None
+                node = (
+                    _YWord(value, mark, event.value)
+                    if value is True or value is False
+                    else YNode(value, mark)
                 )
                 size = 1
                 if event.anchor is not None:
@@ -303,7 +290,8 @@ class _Builder:
                 self.spend(size, mark)
                 # A reference through an alias is reported where it is used, not at
                 # the anchor (the nodes inside a collection keep their own marks).
-                node = YNode(found.value, mark, found.key_marks, found.duplicate_keys, found.raw)
+                keys = found.key_marks if isinstance(found, _YMapping) else None
+                node = YNode.at(found.value, mark, keys, found.duplicate_keys, found.raw)
             else:  # SequenceStartEvent / MappingStartEvent
                 mapping = kind is mapping_start
                 start = event.start_mark

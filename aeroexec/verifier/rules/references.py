@@ -59,7 +59,9 @@ def _dangling(
 def _repeated(names: Sequence[str]) -> set[str]:
     """The names `names` holds more than once. From a sorted copy (eight bytes a name)
     rather than a set of every name: a list can be a million names long."""
-    if len(names) <= 64:
+    if len(names) <= 64:  # the usual list: a few names, most often none repeated
+        if len(set(names)) == len(names):
+            return set()
         return {n for i, n in enumerate(names) if n in names[:i]}
     ordered = sorted(names)
     return {a for a, b in itertools.pairwise(ordered) if a == b}
