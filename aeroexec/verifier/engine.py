@@ -107,8 +107,10 @@ def iter_catalog_findings(
 
         code_library = behaviors.library()
 
-        def realized(found: Finding) -> Finding:
+        def realize_one(found: Finding) -> Finding:
             return realize_findings(catalog, [found], code_library)[0]
+
+        realized = realize_one
 
     findings: Iterator[Finding] = (Finding.from_diagnostic(d) for d in catalog.diagnostics)
     graphs = CatalogGraphs(catalog, world, library)
