@@ -71,6 +71,13 @@ Exit codes: 0 no errors; 1 errors (or warnings with --strict);
 DEFAULT_MAX_FINDINGS = 100
 
 
+def _non_negative(value: int) -> int:
+    # A callback, not typer's `min=0`: that would import pydantic (start-up time).
+    if value < 0:
+        raise typer.BadParameter("must be 0 (no limit) or more")
+    return value
+
+
 class VerifyFormat(str, Enum):
     text = "text"
     json = "json"
@@ -133,7 +140,7 @@ def verify_command(
         DEFAULT_MAX_FINDINGS,
         "--max-findings",
         metavar="N",
-        min=0,
+        callback=_non_negative,
         help="List at most N findings of each rule in text and github output, then "
         "'... and M more' (all are counted; json and sarif list them all); 0: no limit.",
     ),
