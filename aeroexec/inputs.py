@@ -10,6 +10,13 @@ instead of blocking forever in `open()`.
   FIFO without a writer returns at once instead of waiting for one.
 * `read_bytes` / `read_text`: the whole file, refused above `limit` bytes. The limit is
   enforced while reading too (a file in /proc says size 0 and then has content).
+* `glob_files` / `directory_files`: the files a glob pattern (`**` recursive) or a
+  directory names, and every place that stopped the search (a directory that cannot be
+  listed, a match that is a symlink loop or dangling): `glob.glob` skips those in
+  silence, so an unreadable `flights/` looked like "no match" and an unreadable
+  subdirectory under `**` vanished from a check that then passed.
+* `missing(path)`: why a path names no file ("no such file", "is a symlink loop",
+  "is a dangling symlink"), for the one line that says so.
 
 Errors are the caller's `AeroexecError` subclass, with the file (and, for text that is
 not UTF-8, the line and column of the first bad byte) as the mark.
@@ -17,8 +24,13 @@ not UTF-8, the line and column of the first bad byte) as the mark.
 
 from __future__ import annotations
 
+import errno
+import fnmatch
+import glob
 import os
 import stat
+from collections.abc import Iterator
+from dataclasses import dataclass, field
 
 from aeroexec.errors import AeroexecError, Mark
 
@@ -54,11 +66,11 @@ def _open(path: str | os.PathLike[str], what: str, error: type[AeroexecError]) -
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise error("no such file", Mark(file)) from None
+        raise error(missing(file), Mark(file)) from None
     except IsADirectoryError:
         raise error(f"is a directory, not {what}", Mark(file)) from None
     except OSError as exc:
-        raise error(f"cannot read: {exc.strerror or exc}", Mark(file)) from None
+        raise error(_os_problem(exc), Mark(file)) from None
     try:
         mode = os.fstat(fd).st_mode
     except OSError as exc:
@@ -82,6 +94,15 @@ def regular_file(path: str | os.PathLike[str], what: str, error: type[AeroexecEr
         return os.fstat(fd).st_size
     finally:
         os.close(fd)
+
+
+def is_directory(path: str | os.PathLike[str]) -> bool:
+    """Does `path` name a directory? False, not PermissionError, where a parent cannot
+    be searched (`Path.is_dir` raises then): the reader says why in its one line."""
+    try:
+        return stat.S_ISDIR(os.stat(path).st_mode)
+    except (OSError, ValueError):
+        return False
 
 
 def is_regular_file(path: str | os.PathLike[str]) -> bool:
@@ -142,3 +163,180 @@ def byte_mark(file: str, exc: UnicodeDecodeError) -> Mark:
     start = data.rfind(b"\n", 0, exc.start) + 1
     column = len(data[start : exc.start].decode("utf-8", "replace")) + 1
     return Mark(file, data.count(b"\n", 0, exc.start) + 1, column)
+
+
+# -- which files a command line names ----------------------------------------------------
+def _os_problem(exc: OSError) -> str:
+    if exc.errno == errno.ELOOP:
+        return "is a symlink loop (too many levels of symbolic links)"
+    return f"cannot read: {exc.strerror or exc}"
+
+
+def missing(path: str | os.PathLike[str]) -> str:
+    """Why `path` names no file: "no such file", "is a symlink loop", "is a dangling
+    symlink (to ...)", or what the system said."""
+    try:
+        os.stat(path)
+    except FileNotFoundError:
+        try:
+            target = os.readlink(path)
+        except OSError:
+            return "no such file"
+        return f"is a dangling symlink (to {target!r})"
+    except OSError as exc:
+        return _os_problem(exc)
+    except ValueError:  # a NUL in the name
+        return "no such file"
+    return "no such file"  # it appeared since: say what the caller saw
+
+
+@dataclass(frozen=True, slots=True)
+class Unreadable:
+    """A place the search for inputs could not look into (`problem`: one line)."""
+
+    path: str
+    problem: str
+
+
+@dataclass(frozen=True, slots=True)
+class Expansion:
+    """What a pattern or directory names: `files` (sorted; anything but a directory, so
+    that a FIFO matched is refused by the reader in its own words) and `unreadable`, the
+    places that stopped the search, in the order met."""
+
+    files: list[str] = field(default_factory=list)
+    unreadable: list[Unreadable] = field(default_factory=list)
+
+
+def has_magic(text: str) -> bool:
+    return glob.has_magic(text)
+
+
+def directory_files(path: str | os.PathLike[str], suffixes: tuple[str, ...] = ()) -> Expansion:
+    """The files directly inside the directory `path` whose name ends with one of
+    `suffixes` (any case; every file without them), sorted."""
+    found = Expansion()
+    for name in _names(str(path), found):
+        if not suffixes or name.lower().endswith(suffixes):
+            _keep(os.path.join(str(path), name), found)
+    found.files.sort()
+    return found
+
+
+def glob_files(pattern: str) -> Expansion:
+    """The files `pattern` matches, as `glob.glob(pattern, recursive=True)` finds them
+    (hidden names only for a part that starts with '.'; `**` is any number of
+    directories), sorted; plus the directories that could not be listed and the matches
+    that are symlink loops or dangling symlinks."""
+    found = Expansion()
+    head, parts = _split(pattern)
+    bases = [head]
+    for index, part in enumerate(parts):
+        last = index == len(parts) - 1
+        following: list[str] = []
+        for base in bases:
+            if part == "**":
+                for directory in _tree(base, found):
+                    following.append(directory)
+                    if last:
+                        following.extend(
+                            os.path.join(directory, name)
+                            for name in _names(directory, found)
+                            if not _hidden(name)
+                        )
+            elif glob.has_magic(part):
+                names = [n for n in _names(base, found) if _matches(n, part)]
+                following.extend(os.path.join(base, name) for name in names)
+            elif part:
+                following.append(os.path.join(base, part))
+        if not last:
+            following = [p for p in following if _is_directory(p, found)]
+        bases = list(dict.fromkeys(following))
+    for path in sorted(bases):
+        _keep(path, found)
+    found.files.sort()
+    found.unreadable[:] = dict.fromkeys(found.unreadable)  # `**` lists a directory twice
+    return found
+
+
+def _split(pattern: str) -> tuple[str, list[str]]:
+    """(the anchor: '' or '/', the parts after it)."""
+    head = os.sep if pattern.startswith(os.sep) else ""
+    parts = [p for p in pattern.split(os.sep) if p]
+    return head, parts or [""]
+
+
+def _hidden(name: str) -> bool:
+    return name.startswith(".")
+
+
+def _matches(name: str, part: str) -> bool:
+    if _hidden(name) and not _hidden(part):
+        return False
+    return fnmatch.fnmatch(name, part)
+
+
+def _names(directory: str, found: Expansion) -> list[str]:
+    """The names in `directory` ('' is the current one); one that cannot be listed is
+    noted in `found`."""
+    try:
+        with os.scandir(directory or os.curdir) as entries:
+            return sorted(entry.name for entry in entries)
+    except OSError as exc:
+        problem = f"cannot read this directory: {exc.strerror or exc}"
+        if exc.errno == errno.ELOOP:
+            problem = _os_problem(exc)
+        found.unreadable.append(Unreadable(directory or os.curdir, problem))
+        return []
+
+
+def _is_directory(path: str, found: Expansion) -> bool:
+    """Is `path` a directory to search? One that cannot be reached for want of
+    permission is noted; a symlink loop or a dangling link is no directory (it is
+    reported only where it is a match: `_keep`)."""
+    try:
+        return stat.S_ISDIR(os.stat(path).st_mode)
+    except OSError as exc:
+        if exc.errno in (errno.EACCES, errno.EPERM):
+            found.unreadable.append(Unreadable(path, _os_problem(exc)))
+        return False
+    except ValueError:
+        return False
+
+
+def _tree(base: str, found: Expansion) -> Iterator[str]:
+    """`base` and every directory below it, hidden ones left out, each once (a symlink
+    back up the tree is followed once, not forever)."""
+    seen: set[tuple[int, int]] = set()
+    pending = [base]
+    while pending:
+        directory = pending.pop()
+        try:
+            info = os.stat(directory or os.curdir)
+        except OSError as exc:
+            found.unreadable.append(Unreadable(directory, _os_problem(exc)))
+            continue
+        if (info.st_dev, info.st_ino) in seen:
+            continue
+        seen.add((info.st_dev, info.st_ino))
+        yield directory
+        below = [
+            os.path.join(directory, name) for name in _names(directory, found) if not _hidden(name)
+        ]
+        pending.extend(reversed([p for p in below if _is_directory(p, found)]))
+
+
+def _keep(path: str, found: Expansion) -> None:
+    """Add the match `path` to the files unless it is a directory; one that does not
+    lead to a file (a symlink loop, a dangling symlink) is unreadable."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        if os.path.islink(path):
+            found.unreadable.append(Unreadable(path, missing(path)))
+        return
+    except OSError as exc:
+        found.unreadable.append(Unreadable(path, _os_problem(exc)))
+        return
+    if not stat.S_ISDIR(mode):
+        found.files.append(path)

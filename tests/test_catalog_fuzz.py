@@ -42,6 +42,8 @@ scalars = st.one_of(
     st.none(),
     st.booleans(),
     st.integers(min_value=-(10**30), max_value=10**30),
+    # Beyond a float's range: every number the reader converts must survive these.
+    st.sampled_from([10**400, -(10**400), 2**1024]),
     st.floats(allow_nan=True, allow_infinity=True),
     st.text(max_size=12),
     st.sampled_from(["yes", "no", "goal_based", "recurrent", "TEXT", "", "15"]),

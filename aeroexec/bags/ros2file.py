@@ -27,6 +27,7 @@ from aeroexec.bags.bagfile import BagConnection, _reason
 from aeroexec.bags.ros2types import Ros2Types, is_interface_text
 from aeroexec.bags.types import ros1_name
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.inputs import is_directory, is_regular_file
 from aeroexec.interrupts import check as check_interrupts
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -52,11 +53,13 @@ def is_ros2_bag(path: str | os.PathLike[str]) -> bool:
     """A rosbag2 directory (with metadata.yaml), a `.db3` file, or an MCAP file whose
     profile is `ros2`."""
     file = Path(path)
-    if file.is_dir():
-        return (file / "metadata.yaml").is_file()
+    # Neither asks Path.is_dir/is_file, which raise where a parent cannot be searched:
+    # the reader says why in its one line.
+    if is_directory(file):
+        return is_regular_file(file / "metadata.yaml")
     if file.suffix.lower() == ".db3":
         return True
-    return file.suffix.lower() == ".mcap" and file.is_file() and mcap_profile(file) == "ros2"
+    return file.suffix.lower() == ".mcap" and is_regular_file(file) and mcap_profile(file) == "ros2"
 
 
 class Ros2Bag:

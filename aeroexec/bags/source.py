@@ -12,6 +12,7 @@ from pathlib import Path
 from aeroexec.bags.bagfile import BagFile, is_ros1_bag, open_ros1_bag
 from aeroexec.bags.ros2file import Ros2Bag, is_ros2_bag
 from aeroexec.bags.ros2types import Ros2Types
+from aeroexec.inputs import is_directory
 
 Bag = BagFile | Ros2Bag
 
@@ -27,7 +28,7 @@ def ros_version_of(path: str | os.PathLike[str]) -> int:
     `.bag`), else 1."""
     file = Path(path)
     suffix = file.suffix.lower()
-    return 2 if suffix in (".mcap", ".db3") or (file.is_dir() and suffix != ".bag") else 1
+    return 2 if suffix in (".mcap", ".db3") or (is_directory(file) and suffix != ".bag") else 1
 
 
 def open_bag(path: str | os.PathLike[str], types_dir: str | os.PathLike[str] | None = None) -> Bag:

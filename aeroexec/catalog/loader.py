@@ -12,9 +12,9 @@ from __future__ import annotations
 import difflib
 import math
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from aeroexec.catalog import codes
 from aeroexec.catalog.model import (
@@ -27,6 +27,8 @@ from aeroexec.catalog.model import (
     CapabilityDescriptor,
     Catalog,
     Diagnostic,
+    Marks,
+    PackedMarks,
     Severity,
 )
 from aeroexec.catalog.yamlnodes import YNode, load_yaml
@@ -153,6 +155,16 @@ def _kind(node: YNode) -> str:
     return f"{type(node.value).__name__} ({node.value!r})"
 
 
+class NameRefs(NamedTuple):
+    """A list of names as read, and where each was written."""
+
+    names: tuple[str, ...]
+    marks: Sequence[Mark]
+
+
+NO_NAMES = NameRefs((), ())
+
+
 class _CatalogReader:
     def __init__(self, file: str, text: str) -> None:
         self.file = file
@@ -237,9 +249,10 @@ class _CatalogReader:
         )
         return None
 
-    def names(self, node: YNode | None, what: str, *subjects: str) -> tuple[tuple[str, Mark], ...]:
+    def names(self, node: YNode | None, what: str, *subjects: str) -> NameRefs:
+        """The names of a list (a single name warned about), and the mark of each."""
         if node is None or node.value is None:
-            return ()
+            return NO_NAMES
         items = node.value if node.is_list else [node]
         if not node.is_list and not isinstance(node.value, str):
             self.error(
@@ -248,7 +261,7 @@ class _CatalogReader:
                 node.mark,
                 *subjects,
             )
-            return ()
+            return NO_NAMES
         if not node.is_list:
             self.report(
                 codes.SCALAR_FOR_LIST,
@@ -259,12 +272,17 @@ class _CatalogReader:
                 node.mark,
                 *subjects,
             )
-        result: list[tuple[str, Mark]] = []
+        # The names, and their marks packed (not a (name, Mark) pair per item): a list
+        # a million names long costs the names and eight bytes each.
+        names: list[str] = []
+        marks = PackedMarks(node.file)
         for item in items:
             name = self.name_of(item, f"an entry of {what}", *subjects)
             if name is not None:
-                result.append((name, item.mark))
-        return tuple(result)
+                names.append(name)
+                marks.lines.append(item.line)
+                marks.columns.append(item.column)
+        return NameRefs(tuple(names), marks)
 
     def boolean(self, node: YNode, what: str, *subjects: str) -> bool | None:
         value = node.value
@@ -278,7 +296,7 @@ class _CatalogReader:
         return None
 
     def seconds(self, node: YNode, what: str, *subjects: str) -> float | None:
-        value = _as_float(node.value)
+        value = as_float(node.value)
         if value is not None and 0 < value <= MAX_TIMEOUT_S:
             return value
         if value is not None and value > MAX_TIMEOUT_S:
@@ -478,19 +496,20 @@ class _CatalogReader:
         caps = self.names(
             self.dependency(node, "capabilities", name, name), f"{name}: capabilities", name
         )
-        for key, refs in (("incompatible_lists", lists), ("capabilities", caps)):
-            for i, (_, mark) in enumerate(refs):
-                marks[f"{key}.{i}"] = mark
         arguments = self._arguments(self.dependency(node, "arguments", name, name), name, marks)
+        items = {
+            "incompatible_lists": lists.marks,
+            "capabilities": caps.marks,
+        }
         return BehaviorDescriptor(
             name=name,
             timeout=timeout,
             recurrent=bool(recurrent),
-            incompatible_lists=tuple(n for n, _ in lists),
-            capabilities=tuple(n for n, _ in caps),
+            incompatible_lists=lists.names,
+            capabilities=caps.names,
             arguments=arguments,
             mark=node.mark,
-            marks=marks,
+            marks=Marks(marks, items),
         )
 
     def _recurrent_of(self, node: YNode, name: str) -> bool:
@@ -573,7 +592,7 @@ class _CatalogReader:
                 return malformed(
                     f"a numeric range is [min, max], got {len(values)} numbers", allowed.mark
                 )
-            low, high = _as_float(values[0]), _as_float(values[1])
+            low, high = as_float(values[0]), as_float(values[1])
             if low is None or high is None:
                 return malformed("a range bound is NaN or too large for a float", allowed.mark)
             if low > high:
@@ -604,10 +623,8 @@ class _CatalogReader:
             )
             return None
         members = self.names(members_node, f"list {name}: behaviors", name)
-        marks = dict(node.key_marks)
-        for i, (_, mark) in enumerate(members):
-            marks[f"behaviors.{i}"] = mark
-        return BehaviorList(name, tuple(n for n, _ in members), node.mark, marks)
+        marks = Marks(node.key_marks, {"behaviors": members.marks})
+        return BehaviorList(name, members.names, node.mark, marks)
 
     def _capability(self, node: YNode) -> CapabilityDescriptor | None:
         name = self._required_name(node, "capability", "a capability descriptor")
@@ -637,20 +654,23 @@ class _CatalogReader:
         required = self.names(
             node.get("required_capabilities"), f"capability {name}: required_capabilities", name
         )
-        marks = dict(node.key_marks)
-        for key, refs in (
-            ("processes", processes),
-            ("incompatible_capabilities", conflicts),
-            ("required_capabilities", required),
-        ):
-            for i, (_, mark) in enumerate(refs):
-                marks[f"{key}.{i}"] = mark
+        marks = Marks(
+            node.key_marks,
+            {
+                key: refs.marks
+                for key, refs in (
+                    ("processes", processes),
+                    ("incompatible_capabilities", conflicts),
+                    ("required_capabilities", required),
+                )
+            },
+        )
         return CapabilityDescriptor(
             name=name,
-            processes=tuple(n for n, _ in processes),
+            processes=processes.names,
             active_by_default=default,
-            incompatible_capabilities=tuple(n for n, _ in conflicts),
-            required_capabilities=tuple(n for n, _ in required),
+            incompatible_capabilities=conflicts.names,
+            required_capabilities=required.names,
             mark=node.mark,
             marks=marks,
         )
@@ -676,7 +696,7 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _as_float(value: Any) -> float | None:
+def as_float(value: Any) -> float | None:
     """A YAML number as a float; None for non-numbers, NaN (it compares false with
     everything, so every value would be "outside") and ints beyond float range."""
     if not _is_number(value):

@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from aeroexec.catalog import task_codes as codes
-from aeroexec.catalog.loader import did_you_mean, node_kind
+from aeroexec.catalog.loader import as_float, did_you_mean, node_kind
 from aeroexec.catalog.model import Diagnostic, Severity
 from aeroexec.catalog.tasks import (
     ExclusionConstraint,
@@ -181,7 +181,9 @@ class _TaskReader:
         return None
 
     def goal(self, node: YNode, key: str, *subjects: str) -> ExecutionGoal | None:
-        value = node.text
+        # Only a word can name a goal: a mapping or list must not reach the dict lookup
+        # (unhashable) nor the enum.
+        value = node.text if isinstance(node.text, str) else None
         if key == "execution_goal":
             if value in ("achieve_goal", "keep_running"):
                 return ExecutionGoal(value)
@@ -460,7 +462,9 @@ class _TaskReader:
                 return malformed(
                     f"a numeric range is [min, max], got {len(values)} numbers", allowed.mark
                 )
-            low, high = float(values[0]), float(values[1])
+            low, high = as_float(values[0]), as_float(values[1])
+            if low is None or high is None:
+                return malformed("a range bound is NaN or too large for a float", allowed.mark)
             if not low <= high:
                 return malformed(
                     f"empty range [{values[0]}, {values[1]}] (min > max)", allowed.mark

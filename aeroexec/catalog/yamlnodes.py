@@ -35,13 +35,20 @@ _SCALAR_TAGS = {_CORE + t for t in ("str", "int", "float", "bool", "null")}
 _SEQ_TAG = _CORE + "seq"
 _MAP_TAG = _CORE + "map"
 _MERGE_TAG = _CORE + "merge"
-#: Nodes visited per document, aliases counted each time they are followed. Large enough
-#: for a 100,000-entry catalog, small enough that a "billion laughs" stops in milliseconds
-#: (an alias costs the size of what it names, computed once, not a walk of it).
-DEFAULT_NODE_BUDGET = 5_000_000
+#: Nodes visited per document, aliases counted each time they are followed. Above what
+#: the input cap (16 MB, aeroexec.inputs.TEXT_LIMIT) admits of any real catalog (about
+#: 95,000 nodes per MB: 1.6 million) or of the hostile one of issue 23 (1.8 million
+#: distinct list names), below what a list of one-letter names could pack into 16 MB
+#: (8 million, at ~130 bytes of memory each), so that verify stays under 500 MB; and a
+#: "billion laughs" stops in milliseconds (an alias costs the size of what it names,
+#: computed once, not a walk of it). benchmarks/verify_hostile.py measures both ends.
+DEFAULT_NODE_BUDGET = 2_500_000
 #: A catalog is 6 levels deep; the limit keeps recursive consumers of `YNode`
 #: (`plain()`, `==`) far from Python's recursion limit.
 MAX_DEPTH = 200
+
+
+_NO_KEY_MARKS: dict[str, Mark] = {}
 
 
 class YNode:
@@ -50,26 +57,46 @@ class YNode:
     A plain slotted class rather than a frozen dataclass: a large catalog builds hundreds
     of thousands of them, and a frozen dataclass's `__init__` costs four times as much.
     Treat instances as immutable.
+
+    Most nodes are scalars in lists, so a node holds only what every node has; what
+    only some have lives in subclasses (`YNode.at` makes the right one): a mapping's key marks
+    and duplicate keys (`_YMapping`), a boolean's own text (`_YWord`). The others read
+    the class defaults. (A list a million names long is a million nodes: each slot less
+    is 8 MB less.)
     """
 
-    __slots__ = ("duplicate_keys", "key_marks", "mark", "raw", "value")
+    __slots__ = ("column", "file", "line", "value")
 
-    def __init__(
-        self,
+    #: Mark of each key of a mapping (an empty dict, shared, for other nodes).
+    key_marks: dict[str, Mark] = _NO_KEY_MARKS
+    #: Keys written twice in a mapping, with the mark of the repetition.
+    duplicate_keys: tuple[tuple[str, Mark], ...] = ()
+    #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
+    #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and compare
+    #: them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
+    raw: str | None = None
+
+    def __init__(self, value: Any, mark: Mark) -> None:
+        self.value = value
+        # The mark's parts, not the Mark: one object less per node; `mark` builds it.
+        self.file = mark.file
+        self.line = mark.line
+        self.column = mark.column
+
+    @staticmethod
+    def at(
         value: Any,
         mark: Mark,
         key_marks: dict[str, Mark] | None = None,
         duplicate_keys: tuple[tuple[str, Mark], ...] = (),
         raw: str | None = None,
-    ) -> None:
-        self.value = value
-        self.mark = mark
-        self.key_marks: dict[str, Mark] = {} if key_marks is None else key_marks
-        self.duplicate_keys = duplicate_keys
-        #: The text of a plain scalar that YAML 1.1 resolved to a boolean (`ON`, `yes`,
-        #: `TRUE`...): Aerostack's yaml-cpp loaders read such values as strings and
-        #: compare them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
-        self.raw = raw
+    ) -> YNode:
+        """A node of the class its extras need (a mapping's keys, a boolean's text)."""
+        if key_marks is not None or duplicate_keys:
+            return _YMapping(value, mark, key_marks, duplicate_keys)
+        if raw is not None:
+            return _YWord(value, mark, raw)
+        return YNode(value, mark)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, YNode):
@@ -84,6 +111,10 @@ class YNode:
 
     def __repr__(self) -> str:
         return f"YNode(value={self.value!r}, mark={self.mark!r})"
+
+    @property
+    def mark(self) -> Mark:
+        return Mark(self.file, self.line, self.column)
 
     @property
     def text(self) -> Any:
@@ -113,6 +144,33 @@ class YNode:
         return self.value
 
 
+class _YMapping(YNode):
+    """A mapping's node: with its keys' marks and repeated keys."""
+
+    __slots__ = ("duplicate_keys", "key_marks")
+
+    def __init__(
+        self,
+        value: Any,
+        mark: Mark,
+        key_marks: dict[str, Mark] | None = None,
+        duplicate_keys: tuple[tuple[str, Mark], ...] = (),
+    ) -> None:
+        super().__init__(value, mark)
+        self.key_marks = {} if key_marks is None else key_marks
+        self.duplicate_keys = duplicate_keys
+
+
+class _YWord(YNode):
+    """A scalar YAML 1.1 read as a boolean, with the text it was written as."""
+
+    __slots__ = ("raw",)
+
+    def __init__(self, value: Any, mark: Mark, raw: str | None = None) -> None:
+        super().__init__(value, mark)
+        self.raw = raw
+
+
 def _mark(file: str, mark: Any) -> Mark:
     return Mark(file, mark.line + 1, mark.column + 1)
 
@@ -135,7 +193,7 @@ class _Open:
     def close(self) -> YNode:
         if not self.mapping:
             return YNode(self.items, self.mark)
-        return YNode(self.items, self.mark, self.key_marks, tuple(self.duplicates))
+        return _YMapping(self.items, self.mark, self.key_marks, tuple(self.duplicates))
 
 
 class _Builder:
@@ -210,8 +268,10 @@ class _Builder:
                 else:
                     key = (event.tag, text, event.implicit)
                     value = scalars[key] if key in scalars else self.scalar(event, mark)
-                node = YNode(
-                    value, mark, None, (), event.value if value is True or value is False else None
+                node = (
+                    _YWord(value, mark, event.value)
+                    if value is True or value is False
+                    else YNode(value, mark)
                 )
                 size = 1
                 if event.anchor is not None:
@@ -230,7 +290,8 @@ class _Builder:
                 self.spend(size, mark)
                 # A reference through an alias is reported where it is used, not at
                 # the anchor (the nodes inside a collection keep their own marks).
-                node = YNode(found.value, mark, found.key_marks, found.duplicate_keys, found.raw)
+                keys = found.key_marks if isinstance(found, _YMapping) else None
+                node = YNode.at(found.value, mark, keys, found.duplicate_keys, found.raw)
             else:  # SequenceStartEvent / MappingStartEvent
                 mapping = kind is mapping_start
                 start = event.start_mark

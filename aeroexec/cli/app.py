@@ -23,7 +23,7 @@ from typer._click.shell_completion import CompletionItem
 from aeroexec import __version__
 from aeroexec.cli.command import Group, Typer, running
 from aeroexec.cli.commands import COMMANDS
-from aeroexec.errors import AeroexecError, OutputLost
+from aeroexec.errors import AeroexecError, OutputLost, one_line
 from aeroexec.interrupts import Interrupted, TimedOut, signals_as_interrupts, user_place
 from aeroexec.interrupts import check as check_interrupts
 
@@ -214,6 +214,14 @@ def guarded(func: F) -> F:
             # `aeroexec ... | head` closed the pipe: not an error worth a traceback.
             sys.stderr.close()
             raise typer.Exit(0) from None
+        except OSError as exc:
+            # A path the system refused where no reader of aeroexec.inputs stood guard (a
+            # parent directory without search permission, met by a `Path.exists()`):
+            # still one line naming the file, never a traceback.
+            if exc.filename is None:
+                raise
+            error_line(one_line(f"{exc.filename}: error: {exc.strerror or exc}"))
+            raise typer.Exit(2) from None
 
     return wrapper  # type: ignore[return-value]
 

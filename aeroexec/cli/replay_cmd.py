@@ -45,6 +45,7 @@ from aeroexec.cli.spec import (
     with_verdicts_junit,
 )
 from aeroexec.errors import AeroexecError, Mark, RecordingError
+from aeroexec.inputs import is_regular_file
 from aeroexec.mission.script import load_mission
 from aeroexec.progress import ProgressFactory, progress_bar
 from aeroexec.replay.diff import Tolerance
@@ -114,7 +115,7 @@ def _check_outputs(paths: list[str], output: str | None, out_dir: str | None) ->
         targets = [output_for(p, out_dir) for p in paths]
     if len(set(targets)) != len(targets):
         raise AeroexecError("--output-dir: two recordings would be written to the same file")
-    sources = {Path(p).resolve() for p in paths if Path(p).exists()}
+    sources = {Path(p).resolve() for p in paths if is_regular_file(p)}
     for target in targets:
         if Path(target).resolve() in sources:
             raise RecordingError("would overwrite a recording being replayed", Mark(target))

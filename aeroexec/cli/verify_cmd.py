@@ -57,7 +57,9 @@ functions and API aliases are folded, every call is checked against each behavio
 catalog, and the calls are run as sequences, path by path, in the executive (preempted
 inhibits, capability conflicts, flight state, behaviors left running). An input that
 cannot be read is reported (one line on stderr, and in the json/sarif/github output)
-and the others are verified all the same; the exit code is then 2.
+and the others are verified all the same; the exit code is then 2. Text and github
+output list at most --max-findings (100) findings per rule, then "... and N more";
+json and sarif list them all, and every finding counts in the summary and exit code.
 
 When the project declares its behaviors (-b/--behaviors, `behaviors` in
 [tool.aeroexec] or aeroexec.toml, an installed 'aeroexec.behaviors' entry point), each
@@ -90,11 +92,24 @@ Examples:
   aeroexec verify --diff        # then --fix
   aeroexec verify --list-rules
   aeroexec verify --explain AX304
+  aeroexec verify huge.yaml --max-findings 0   # every finding, however many
 
 \b
 Exit codes: 0 no errors; 1 errors (or warnings with --strict);
             2 an input could not be read (one line each on stderr).
 """
+
+
+#: Findings of one rule listed in text output before "... and N more": a screenful or
+#: two, enough to see the pattern of a systematic mistake.
+DEFAULT_MAX_FINDINGS = 100
+
+
+def _non_negative(value: int) -> int:
+    # A callback, not typer's `min=0`: that would import pydantic (start-up time).
+    if value < 0:
+        raise typer.BadParameter("must be 0 (no limit) or more")
+    return value
 
 
 class VerifyFormat(str, Enum):
@@ -157,6 +172,14 @@ def verify_command(
         "their documentation too.",
     ),
     spec: SpecOption = None,
+    max_findings: int = typer.Option(
+        DEFAULT_MAX_FINDINGS,
+        "--max-findings",
+        metavar="N",
+        callback=_non_negative,
+        help="List at most N findings of each rule in text and github output, then "
+        "'... and M more' (all are counted; json and sarif list them all); 0: no limit.",
+    ),
     color: Color = color_option(),
     behaviors: BehaviorsOption = None,
     timeout: float | None = timeout_option(
@@ -237,6 +260,9 @@ def verify_command(
     found = project_behaviors(behaviors, settings, disable_plugin)
     world_path = first(world, settings.world, None)
     limits = load_world(world_path) if world_path is not None else None
+    # json and sarif are read by programs: every finding. Text and annotations are read
+    # by people, who do not read a million lines of one rule.
+    limit = max_findings if fmt in ("text", "github") and max_findings > 0 else None
     uses, spec_errors = signal_uses(spec or [])
 
     def run() -> Report:
@@ -247,6 +273,7 @@ def verify_command(
             behaviors=found if found.declared else None,
             signals=uses,
             selection=selection,
+            max_findings=limit,
         )
         if spec_errors:
             checked = dataclasses.replace(

@@ -40,6 +40,14 @@ class ChannelInfo:
     metadata: tuple[tuple[str, str], ...] = ()
 
 
+def attachment_place(recording: str | os.PathLike[str], name: str) -> str:
+    """The file of a `Mark` inside attachment `name` of `recording`: `REC#NAME` (then
+    `:LINE:COL`), as a URL names a fragment of a page. A tampered attachment is the
+    recording's fault: its errors must name the recording, not the file it was copied
+    from."""
+    return f"{os.fspath(recording)}#{name}"
+
+
 @dataclass(frozen=True, slots=True)
 class RecordedAttachment:
     name: str

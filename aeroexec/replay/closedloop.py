@@ -39,6 +39,7 @@ from aeroexec.mission.session import (
     stand_in_metadata,
 )
 from aeroexec.plugins.discovery import BehaviorSet
+from aeroexec.recording.reader import attachment_place
 from aeroexec.replay.collect import OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -77,11 +78,16 @@ def _seed(metadata: dict[str, str], notes: list[str]) -> int:
 
 
 def _world(run: RecordedRun, notes: list[str]) -> tuple[str, str]:
+    """The world's text and its name (as the recording's metadata gives it: the session
+    records it again). The attachment is checked here, where its errors are marked as
+    the recording's (`REC#world.yaml:LINE:COL`): a tampered world is the recording's
+    fault, not that of the world file it was once copied from."""
     name = run.metadata.get("world") or "default"
     text = run.text("world.yaml")
     if text is None:
         notes.append("no world.yaml attachment: replayed in the default world")
         return DEFAULT_WORLD.read_text(encoding="utf-8"), "default"
+    parse_world(text, attachment_place(run.outcome.source, "world.yaml"))
     return text, name
 
 

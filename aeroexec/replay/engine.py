@@ -24,11 +24,12 @@ from typing import Any
 from aeroexec.bags.replay import bag_recording
 from aeroexec.bags.source import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
-from aeroexec.errors import AeroexecError, CatalogError, Mark, RecordingError
+from aeroexec.errors import AeroexecError, CatalogError, Mark, RecordingError, one_line
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.progress import ProgressFactory
+from aeroexec.recording.reader import attachment_place
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
@@ -119,7 +120,7 @@ def choose_catalog(run: RecordedRun, path: str | None) -> ChosenCatalog:
             Mark(run.outcome.source),
         )
     name = run.metadata.get("catalog") or "catalog.yaml"
-    catalog = strict(parse_catalog(text, f"{run.outcome.source}#catalog.yaml"))
+    catalog = strict(parse_catalog(text, attachment_place(run.outcome.source, "catalog.yaml")))
     return ChosenCatalog(catalog, text, name)
 
 
@@ -299,9 +300,24 @@ def replay_file(
     try:
         result = replay_recording(path, options, progress)
     except AeroexecError as exc:
-        text = exc.message if exc.mark is not None and exc.mark.file == path else str(exc)
-        result = ReplayResult(recording=path, error=text, mode=_mode_name(options))
+        result = ReplayResult(recording=path, error=_problem(path, exc), mode=_mode_name(options))
     return replace(result, seconds=time.perf_counter() - started)
+
+
+def _problem(path: str, exc: AeroexecError) -> str:
+    """The error, said after `PATH: error: ` (the line replay prints per recording):
+    without the recording's name again, and an attachment's place as `attachment
+    world.yaml:2:1`."""
+    mark = exc.mark
+    if mark is None:
+        return str(exc)
+    if mark.file == path:
+        return one_line(exc.message)
+    inside = attachment_place(path, "")
+    if mark.file.startswith(inside):
+        place = Mark(mark.file[len(inside) :], mark.line, mark.column)
+        return one_line(f"attachment {place}: {exc.message}")
+    return str(exc)
 
 
 def _mode_name(options: ReplayOptions) -> str | None:

@@ -5,13 +5,12 @@ bag) and glob patterns (sorted matches), in the order given; the same for URLs
 
 from __future__ import annotations
 
-import glob
+import os
 from dataclasses import dataclass
-from pathlib import Path
 
+from aeroexec.inputs import directory_files, glob_files, has_magic, is_directory
 from aeroexec.replay.remote import expand_url, is_url
 
-_GLOB_CHARS = frozenset("*?[")
 #: What a directory contributes.
 SUFFIXES = (".mcap", ".bag")
 #: What makes a directory one rosbag2 bag rather than a folder of recordings.
@@ -28,6 +27,10 @@ class Input:
 
 
 def expand_inputs(arguments: list[str]) -> list[Input]:
+    """The recordings `arguments` name, in order. A directory that cannot be listed (the
+    one given, or one under a `**` pattern) and a match that is a symlink loop are
+    inputs with an error, like a pattern that matches nothing: reported, never skipped
+    in silence (`aeroexec.inputs.glob_files`)."""
     out: list[Input] = []
     for argument in arguments:
         if is_url(argument):
@@ -35,21 +38,20 @@ def expand_inputs(arguments: list[str]) -> list[Input]:
                 Input(url, error) for url, error in expand_url(argument, SUFFIXES, EMPTY_DIRECTORY)
             )
             continue
-        path = Path(argument)
-        if path.is_dir() and (path / ROSBAG2_METADATA).is_file():
+        if is_directory(argument) and os.path.isfile(os.path.join(argument, ROSBAG2_METADATA)):
             out.append(Input(argument))  # a ROS 2 bag: one recording, imported first
-        elif path.is_dir():
-            found = sorted(
-                str(p) for p in path.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file()
-            )
-            if not found:
+            continue
+        if is_directory(argument):
+            found = directory_files(argument, SUFFIXES)
+            if not found.files and not found.unreadable:
                 out.append(Input(argument, EMPTY_DIRECTORY))
-            out.extend(Input(p) for p in found)
-        elif not path.exists() and _GLOB_CHARS & set(argument):
-            matches = sorted(m for m in glob.glob(argument, recursive=True) if Path(m).is_file())
-            if not matches:
+        elif not os.path.lexists(argument) and has_magic(argument):
+            found = glob_files(argument)
+            if not found.files and not found.unreadable:
                 out.append(Input(argument, "no recordings match this pattern"))
-            out.extend(Input(m) for m in matches)
         else:
             out.append(Input(argument))
+            continue
+        out.extend(Input(u.path, u.problem) for u in found.unreadable)
+        out.extend(Input(p) for p in found.files)
     return out

@@ -11,8 +11,8 @@ with missions, the task rules with a task catalog, the witness runs with behavio
 
 from __future__ import annotations
 
-import glob
-from collections.abc import Iterable, Mapping, Sequence
+import itertools
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -25,8 +25,9 @@ from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import AeroexecError, CatalogError, Mark
 from aeroexec.executive.behavior import Behavior
 from aeroexec.gc_pause import paused_gc
+from aeroexec.inputs import glob_files, has_magic
 from aeroexec.vehicles.world import World
-from aeroexec.verifier.findings import Finding, InputError, Report
+from aeroexec.verifier.findings import Finding, FindingCollector, InputError, Report
 from aeroexec.verifier.graphs import CatalogGraphs
 from aeroexec.verifier.registry import catalog_checks, code_checks, task_checks
 from aeroexec.verifier.signals import SignalUse, check_signal_uses
@@ -36,26 +37,32 @@ if TYPE_CHECKING:
     from aeroexec.verifier.bt_missions import BtMission
     from aeroexec.verifier.missions import MissionScript
     from aeroexec.verifier.selection import RuleSelection
+    from aeroexec.verifier.suppress import Suppressions
 
 CatalogInput = str | Path | Catalog | TaskCatalog
 Library = Mapping[str, type[Behavior]]
 
 
-def expand_catalog_paths(patterns: Iterable[str | Path]) -> list[str]:
+def expand_catalog_paths(patterns: Iterable[str | Path]) -> tuple[list[str], list[CatalogError]]:
     """Catalog paths as given; glob patterns that name no existing file (quoted on the
-    command line, or on Windows) are expanded here. `CatalogError` for a pattern that
-    matches nothing; a plain missing path is left for the loader to report."""
+    command line, or on Windows) are expanded here (`**` recursive). Beside the paths,
+    the errors met: a pattern that matches nothing, a directory the search could not
+    read (it would otherwise look like "no match", or drop catalogs from the check in
+    silence), a match that is a symlink loop. A plain missing path is left for the
+    loader to report."""
     result: list[str] = []
+    errors: list[CatalogError] = []
     for pattern in patterns:
         text = str(pattern)
-        if not glob.has_magic(text) or _exists(text):
+        if not has_magic(text) or _exists(text):
             result.append(text)
             continue
-        matches = sorted(glob.glob(text, recursive=True))
-        if not matches:
-            raise CatalogError("no catalog matches this pattern", Mark(text))
-        result.extend(matches)
-    return result
+        found = glob_files(text)
+        errors.extend(CatalogError(u.problem, Mark(u.path)) for u in found.unreadable)
+        if not found.files and not found.unreadable:
+            errors.append(CatalogError("no catalog matches this pattern", Mark(text)))
+        result.extend(found.files)
+    return result, errors
 
 
 def _exists(path: str) -> bool:
@@ -81,43 +88,72 @@ def check_catalog(
     `behaviors`, else the standard library). With `behaviors` (the implementations the
     project runs), the catalog is checked against them too (AX9xx).
     """
+    return list(
+        iter_catalog_findings(catalog, codes, world=world, library=library, behaviors=behaviors)
+    )
+
+
+def iter_catalog_findings(
+    catalog: Catalog,
+    codes: Iterable[str] | None = None,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
+    behaviors: BehaviorSet | None = None,
+) -> Iterator[Finding]:
+    """`check_catalog`, one finding at a time: a caller that keeps only some of them
+    (`FindingCollector`) never holds them all."""
     wanted = None if codes is None else set(codes)
-    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
     if library is None and behaviors is not None:
         library = behaviors.library()
-    graphs = CatalogGraphs(catalog, world, library)
-    for rule in catalog_checks():
-        if wanted is not None and rule.code not in wanted:
-            continue
-        assert rule.check is not None
-        findings.extend(rule.check(graphs))  # type: ignore[call-arg]  (a catalog rule)
+    realized: Callable[[Finding], Finding] | None = None
     if behaviors is not None:
-        for rule in code_checks():
-            if wanted is None or rule.code in wanted:
-                findings.extend(rule.check(graphs, behaviors))  # type: ignore[call-arg]
         # Witnesses as the real behaviors make them happen (TAKE_OFF first, ...).
         from aeroexec.verifier.witness_run import realize_findings
 
-        findings = realize_findings(catalog, findings, behaviors.library())
-    return findings
+        code_library = behaviors.library()
+
+        def realize_one(found: Finding) -> Finding:
+            return realize_findings(catalog, [found], code_library)[0]
+
+        realized = realize_one
+
+    findings: Iterator[Finding] = (Finding.from_diagnostic(d) for d in catalog.diagnostics)
+    graphs = CatalogGraphs(catalog, world, library)
+    rules = [r for r in catalog_checks() if wanted is None or r.code in wanted]
+    findings = itertools.chain(
+        findings,
+        *(rule.check(graphs) for rule in rules),  # type: ignore[call-arg]  (catalog rules)
+    )
+    if behaviors is not None:
+        code_rules = [r for r in code_checks() if wanted is None or r.code in wanted]
+        findings = itertools.chain(
+            findings,
+            *(rule.check(graphs, behaviors) for rule in code_rules),  # type: ignore[call-arg]
+        )
+    for finding in findings:
+        yield finding if realized is None else realized(finding)
 
 
 def check_task_catalog(catalog: TaskCatalog, codes: Iterable[str] | None = None) -> list[Finding]:
     """The task loader's diagnostics plus every task rule's findings (unsorted)."""
+    return list(iter_task_findings(catalog, codes))
+
+
+def iter_task_findings(
+    catalog: TaskCatalog, codes: Iterable[str] | None = None
+) -> Iterator[Finding]:
     from aeroexec.verifier.task_rules import TaskContext
 
     wanted = None if codes is None else set(codes)
-    findings = [Finding.from_diagnostic(d) for d in catalog.diagnostics]
+    yield from (Finding.from_diagnostic(d) for d in catalog.diagnostics)
     context = TaskContext(catalog)
-    for rule in task_checks():
-        if wanted is not None and rule.code not in wanted:
-            continue
-        assert rule.check is not None
-        findings.extend(rule.check(context))  # type: ignore[arg-type]
+    rules = [r for r in task_checks() if wanted is None or r.code in wanted]
+    found = itertools.chain.from_iterable(r.check(context) for r in rules)  # type: ignore[misc, arg-type]
     # `run` cannot run a task catalog: its witnesses are replayed on the model instead.
     from aeroexec.verifier.task_witness import checked_on_model
 
-    return checked_on_model(catalog, findings)
+    yield from checked_on_model(catalog, found)
 
 
 def check_any_catalog(
@@ -127,9 +163,19 @@ def check_any_catalog(
     library: Library | None = None,
     behaviors: BehaviorSet | None = None,
 ) -> list[Finding]:
+    return list(iter_any_findings(catalog, world=world, library=library, behaviors=behaviors))
+
+
+def iter_any_findings(
+    catalog: AnyCatalog,
+    *,
+    world: World | None = None,
+    library: Library | None = None,
+    behaviors: BehaviorSet | None = None,
+) -> Iterator[Finding]:
     if isinstance(catalog, TaskCatalog):
-        return check_task_catalog(catalog)
-    return check_catalog(catalog, world=world, library=library, behaviors=behaviors)
+        return iter_task_findings(catalog)
+    return iter_catalog_findings(catalog, world=world, library=library, behaviors=behaviors)
 
 
 def verify_catalog(catalog: AnyCatalog) -> Report:
@@ -162,11 +208,8 @@ def _read_catalogs(
         if isinstance(source, (Catalog, TaskCatalog)):
             loaded.append(source)
             continue
-        try:
-            paths = expand_catalog_paths([source])
-        except AeroexecError as exc:
-            errors.append(InputError.of(exc, str(source)))
-            continue
+        paths, unreadable = expand_catalog_paths([source])
+        errors.extend(InputError.of(exc) for exc in unreadable)
         for path in paths:
             interrupts.check()
             try:
@@ -196,11 +239,8 @@ def _read_missions(
 
     scripts = [m for m in sources if isinstance(m, MissionScript)]
     for pattern in (m for m in sources if not isinstance(m, MissionScript)):
-        try:
-            paths = expand_mission_paths([pattern])
-        except AeroexecError as exc:
-            errors.append(InputError.of(exc, str(pattern)))
-            continue
+        paths, unreadable = expand_mission_paths([pattern])
+        errors.extend(InputError.of(exc) for exc in unreadable)
         for path in paths:
             interrupts.check()
             try:
@@ -223,6 +263,7 @@ def verify(
     signals: Sequence[SignalUse] = (),
     selection: RuleSelection | None = None,
     in_place: bool = True,
+    max_findings: int | None = None,
 ) -> Report:
     """Verify catalogs of any generation (paths, glob patterns or loaded catalogs) and
     the mission scripts (paths, glob patterns or parsed scripts) that use them; every
@@ -239,41 +280,43 @@ def verify(
     rule); with `in_place`, a finding whose line carries a suppression comment
     (`# noqa: AX711`, `# aeroexec: ignore[AX401]`) is left out and counted in
     `Report.suppressed`.
+
+    With `max_findings`, the report keeps the first that many findings of each rule (by
+    place) and counts the rest (`Report.omitted`): memory stays bounded however many a
+    catalog has. Selection and suppression come first: what is left out there is
+    neither kept nor counted as omitted.
     """
     # The rules build graphs and indexes as large as the catalog: no cyclic garbage
     # worth the collector's passes over everything already loaded.
     with paused_gc():
-        report = _verify(catalogs, missions, world, library, behaviors, signals)
-    return filter_report(report, selection, in_place)
+        admitted = Admission(selection, in_place)
+        return _verify(
+            catalogs, missions, world, library, behaviors, signals, max_findings, admitted
+        )
 
 
-def filter_report(
-    report: Report, selection: RuleSelection | None = None, in_place: bool = True
-) -> Report:
-    """The report less the findings `selection` does not ask for, and (with
-    `in_place`) less those a comment on their line suppresses."""
-    findings = report.findings
-    if selection is not None and not selection.everything:
-        findings = tuple(f for f in findings if selection.enabled(f.rule, f.file))
-    suppressed = 0
-    if in_place and findings:
-        from aeroexec.verifier.suppress import Suppressions
+class Admission:
+    """Which findings a report takes: those `selection` asks for (every rule without
+    one), less (with `in_place`) those a comment on their line suppresses, counted."""
 
-        comments = Suppressions()
-        kept = tuple(f for f in findings if not comments.suppressed(f.file, f.line, f.rule))
-        suppressed = len(findings) - len(kept)
-        if suppressed:
-            findings = kept
-    if len(findings) == len(report.findings):
-        return report  # nothing left out: no second sort of every finding
-    return Report(
-        findings,
-        report.catalogs,
-        report.missions,
-        report.hidden,
-        report.input_errors,
-        report.suppressed + suppressed,
-    )
+    def __init__(self, selection: RuleSelection | None, in_place: bool) -> None:
+        self.selection = None if selection is None or selection.everything else selection
+        self.comments: Suppressions | None = None
+        if in_place:
+            from aeroexec.verifier.suppress import Suppressions
+
+            self.comments = Suppressions()
+        self.suppressed = 0
+
+    def __call__(self, finding: Finding) -> bool:
+        if self.selection is not None and not self.selection.enabled(finding.rule, finding.file):
+            return False
+        if self.comments is not None and self.comments.suppressed(
+            finding.file, finding.line, finding.rule
+        ):
+            self.suppressed += 1
+            return False
+        return True
 
 
 def _verify(
@@ -283,6 +326,8 @@ def _verify(
     library: Library | None,
     behaviors: BehaviorSet | None,
     signals: Sequence[SignalUse] = (),
+    max_findings: int | None = None,
+    admitted: Admission | None = None,
 ) -> Report:
     if library is None and behaviors is not None:
         library = behaviors.library()
@@ -290,12 +335,12 @@ def _verify(
     trees: list[BtMission] = []
     loaded = _read_catalogs(catalogs, errors, trees)
     scripts = _read_missions(missions, errors, trees)
-    findings: list[Finding] = []
+    findings = FindingCollector(max_findings, admitted)
     behavior_catalogs = [c for c in loaded if isinstance(c, Catalog)]
     for catalog in loaded:
         interrupts.check()
         findings.extend(
-            check_any_catalog(catalog, world=world, library=library, behaviors=behaviors)
+            iter_any_findings(catalog, world=world, library=library, behaviors=behaviors)
         )
     # Missions use the behavior API (execute/activate/inhibit_behavior): they are
     # checked against the behavior catalogs.
@@ -323,8 +368,10 @@ def _verify(
             for script in folded:
                 findings.extend(check_mission(script, catalog, note, library=library, world=world))
     return Report(
-        tuple(findings),
+        findings.findings(),
         catalogs=tuple(c.source for c in loaded),
         missions=(*(s.path for s in scripts), *(t.path for t in trees)),
         input_errors=tuple(errors),
+        omitted=findings.omitted(),
+        suppressed=admitted.suppressed if admitted is not None else 0,
     )

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
@@ -272,6 +272,85 @@ class Finding:
 _RANK = {Severity.INFO: 0, Severity.WARNING: 1, Severity.ERROR: 2}
 
 
+@dataclass(frozen=True, slots=True)
+class Omitted:
+    """Findings of one rule (and severity) beyond the report's limit: counted, not kept."""
+
+    rule: str
+    severity: Severity
+    count: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"rule": self.rule, "severity": self.severity.value, "count": self.count}
+
+
+class FindingCollector:
+    """Findings as rules yield them, keeping at most `limit` per rule (None: all): the
+    first ones by place (`Finding.sort_key`), the rest only counted.
+
+    A catalog with a million dangling names yields a million findings; nobody reads past
+    the first screenful of one rule's, and holding them all costs hundreds of bytes
+    each. Per rule, a buffer of at most `max(4 * limit, 4096)` findings is sorted and cut
+    back to `limit` when full: memory bounded by the limit, time n log(buffer).
+    """
+
+    def __init__(
+        self, limit: int | None = None, admit: Callable[[Finding], bool] | None = None
+    ) -> None:
+        if limit is not None and limit < 0:
+            raise ValueError("limit must be >= 0 or None")
+        self.limit = limit
+        #: Which findings are taken at all (the rules selected, not suppressed in place).
+        self.admit = admit
+        self._room = 0 if limit is None else max(4 * limit, 4096)
+        self._all: list[Finding] = []
+        self._kept: dict[str, list[Finding]] = {}
+        self._seen: dict[tuple[str, Severity], int] = {}
+
+    def add(self, finding: Finding) -> None:
+        if self.admit is not None and not self.admit(finding):
+            return
+        if self.limit is None:
+            self._all.append(finding)
+            return
+        key = (finding.rule, finding.severity)
+        self._seen[key] = self._seen.get(key, 0) + 1
+        kept = self._kept.setdefault(finding.rule, [])
+        kept.append(finding)
+        if len(kept) >= self._room:
+            kept.sort(key=Finding.sort_key)
+            del kept[self.limit :]
+
+    def extend(self, findings: Iterable[Finding]) -> None:
+        for finding in findings:
+            self.add(finding)
+
+    def findings(self) -> tuple[Finding, ...]:
+        """The findings kept (unsorted: `Report` sorts them)."""
+        if self.limit is None:
+            return tuple(self._all)
+        out: list[Finding] = []
+        for kept in self._kept.values():
+            kept.sort(key=Finding.sort_key)
+            del kept[self.limit :]
+            out.extend(kept)
+        return tuple(out)
+
+    def omitted(self) -> tuple[Omitted, ...]:
+        """What was counted but not kept, per rule and severity (rule order)."""
+        if self.limit is None:
+            return ()
+        kept: dict[tuple[str, Severity], int] = {}
+        for finding in self.findings():
+            key = (finding.rule, finding.severity)
+            kept[key] = kept.get(key, 0) + 1
+        return tuple(
+            Omitted(rule, severity, seen - kept.get((rule, severity), 0))
+            for (rule, severity), seen in sorted(self._seen.items(), key=lambda i: i[0][0])
+            if seen > kept.get((rule, severity), 0)
+        )
+
+
 @dataclass(frozen=True)
 class Report:
     """Every finding of one verifier run, sorted by place, and the inputs it read."""
@@ -285,6 +364,9 @@ class Report:
     input_errors: tuple[InputError, ...] = ()
     #: Findings silenced by a comment in place (noqa, or aeroexec: ignore[...]).
     suppressed: int = 0
+    #: Findings beyond the limit of findings kept per rule (`verify(max_findings=...)`):
+    #: counted in the summary and the exit code, not listed.
+    omitted: tuple[Omitted, ...] = ()
     _counts: Mapping[Severity, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -293,6 +375,8 @@ class Report:
         counts = dict.fromkeys(Severity, 0)
         for finding in ordered:
             counts[finding.severity] += 1
+        for left_out in self.omitted:
+            counts[left_out.severity] += left_out.count
         object.__setattr__(self, "_counts", counts)
 
     @property
@@ -321,14 +405,24 @@ class Report:
         `hidden`)."""
         rank = _RANK[severity]
         kept = tuple(f for f in self.findings if _RANK[f.severity] >= rank)
+        omitted = tuple(o for o in self.omitted if _RANK[o.severity] >= rank)
+        below = sum(o.count for o in self.omitted) - sum(o.count for o in omitted)
         return Report(
             kept,
             self.catalogs,
             self.missions,
-            self.hidden + len(self.findings) - len(kept),
+            self.hidden + len(self.findings) - len(kept) + below,
             self.input_errors,
-            self.suppressed,
+            suppressed=self.suppressed,
+            omitted=omitted,
         )
+
+    def omitted_by_rule(self) -> dict[str, int]:
+        """Rule -> how many of its findings are counted but not listed."""
+        out: dict[str, int] = {}
+        for left_out in self.omitted:
+            out[left_out.rule] = out.get(left_out.rule, 0) + left_out.count
+        return out
 
     def by_rule(self, rule: str) -> tuple[Finding, ...]:
         return tuple(f for f in self.findings if f.rule == rule)
@@ -337,8 +431,11 @@ class Report:
         return {"errors": self.errors, "warnings": self.warnings, "infos": self.infos}
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        document = {
             "findings": [f.to_dict() for f in self.findings],
             "summary": self.summary(),
             "inputErrors": [e.to_dict() for e in self.input_errors],
         }
+        if self.omitted:  # only with a limit (the CLI sets none for json and sarif)
+            document["omitted"] = [o.to_dict() for o in self.omitted]
+        return document

@@ -378,11 +378,18 @@ class CatalogGraphs:
     # -- lists and preemption ------------------------------------------------------------
     @cached_property
     def list_namers(self) -> dict[str, tuple[str, ...]]:
-        """List -> behaviors (catalog order) that name it in incompatible_lists."""
+        """Defined list -> behaviors (catalog order) that name it in incompatible_lists.
+        Undefined names are left out: a hostile catalog names a million of them, each an
+        entry here for nothing (AX201 reports them from the descriptors)."""
+        lists = self.catalog.lists
         result: dict[str, list[str]] = {}
         for name, behavior in self.catalog.behaviors.items():
-            for list_name in dict.fromkeys(behavior.incompatible_lists):
-                result.setdefault(list_name, []).append(name)
+            # Deduplicated among the defined lists only: no set of every name written.
+            named = {n for n in behavior.incompatible_lists if n in lists}
+            for list_name in behavior.incompatible_lists:
+                if list_name in named:
+                    named.discard(list_name)
+                    result.setdefault(list_name, []).append(name)
         return {k: tuple(v) for k, v in result.items()}
 
     def preempts(self, a: str, b: str) -> bool:

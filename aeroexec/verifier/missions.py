@@ -17,8 +17,8 @@ name stays unknown are counted (AX708); a script without an entry point is an er
 from __future__ import annotations
 
 import ast
-import glob
 import io
+import os
 import tokenize
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, replace
@@ -29,7 +29,7 @@ from aeroexec.catalog.arguments import check_value
 from aeroexec.catalog.model import ArgumentKind, ArgumentSpec, Catalog, Severity
 from aeroexec.errors import Mark, MissionError
 from aeroexec.executive.behavior import Behavior
-from aeroexec.inputs import read_text
+from aeroexec.inputs import glob_files, has_magic, read_text
 from aeroexec.vehicles.world import World
 from aeroexec.verifier.findings import Finding
 from aeroexec.verifier.mission_fold import (
@@ -157,30 +157,31 @@ class MissionScript:
 
 
 # -- reading -----------------------------------------------------------------------------
-def expand_mission_paths(patterns: Iterable[str | Path]) -> list[str]:
-    """Files named by paths and glob patterns (`**` recursive), each once, in order.
-    `MissionError` for a pattern that names nothing."""
+def expand_mission_paths(patterns: Iterable[str | Path]) -> tuple[list[str], list[MissionError]]:
+    """Files named by paths and glob patterns (`**` recursive), each once, in order, and
+    the errors met: a pattern that names nothing, a directory the search could not read,
+    a match that is a symlink loop (`aeroexec.inputs.glob_files`). A plain path that
+    names no file is left for `read_mission` to say why."""
     found: dict[str, None] = {}
+    errors: list[MissionError] = []
     for pattern in patterns:
         text = str(pattern)
-        path = Path(text)
         try:
-            exists, is_dir = path.exists(), path.is_dir()
+            is_dir = Path(text).is_dir()
         except OSError as exc:  # e.g. a name too long
-            raise MissionError(f"cannot read: {exc.strerror}", Mark(text)) from None
-        if exists and not is_dir:  # read_mission refuses a non-regular one
-            found[text] = None
+            errors.append(MissionError(f"cannot read: {exc.strerror}", Mark(text)))
             continue
         if is_dir:
-            raise MissionError("is a directory; give mission files or a glob", Mark(text))
-        if glob.has_magic(text):
-            matches = sorted(m for m in glob.glob(text, recursive=True) if Path(m).is_file())
-            if matches:
-                found.update(dict.fromkeys(matches))
-                continue
-            raise MissionError("no mission file matches this pattern", Mark(text))
-        raise MissionError("no such file", Mark(text))
-    return list(found)
+            errors.append(MissionError("is a directory; give mission files or a glob", Mark(text)))
+        elif not has_magic(text) or os.path.lexists(text):
+            found[text] = None  # read_mission refuses a missing or non-regular one
+        else:
+            matches = glob_files(text)
+            errors.extend(MissionError(u.problem, Mark(u.path)) for u in matches.unreadable)
+            if not matches.files and not matches.unreadable:
+                errors.append(MissionError("no mission file matches this pattern", Mark(text)))
+            found.update(dict.fromkeys(matches.files))
+    return list(found), errors
 
 
 def read_mission(path: str | Path) -> MissionScript:

@@ -43,6 +43,10 @@ def _trigrams(word: str) -> set[str]:
     return {padded[i : i + 3] for i in range(len(padded) - 2)}
 
 
+#: Words whose suggestion a `Suggester` remembers.
+CACHE_SIZE = 65_536
+
+
 class Suggester:
     """Suggests a close name from a fixed pool (kept in the given order)."""
 
@@ -55,6 +59,10 @@ class Suggester:
 
     def best(self, word: str) -> str | None:
         if word not in self._cache:
+            if len(self._cache) >= CACHE_SIZE:
+                # A catalog can misspell a million distinct names: memory stays bounded
+                # (a name asked about again is usually asked about soon after).
+                self._cache.clear()
             self._cache[word] = self._best(word)
         return self._cache[word]
 

@@ -11,6 +11,7 @@ the witness's outcome, that it does not hold there.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from dataclasses import replace
 
 from aeroexec.catalog.tasks import TaskCatalog
@@ -43,16 +44,15 @@ def replays(model: TaskModel, witness: Witness) -> bool:
     return witness.outcome is not Outcome.REJECTED
 
 
-def checked_on_model(catalog: TaskCatalog, findings: list[Finding]) -> list[Finding]:
+def checked_on_model(catalog: TaskCatalog, findings: Iterable[Finding]) -> Iterator[Finding]:
     """The findings, each task witness replayed on the model and marked so."""
-    model = TaskModel(catalog)
-    out: list[Finding] = []
+    model: TaskModel | None = None  # built for the first witness: most findings have none
     for finding in findings:
         witness = finding.witness
         if witness is None or any(s.service != "start_task" for s in witness.steps):
-            out.append(finding)
+            yield finding
             continue
+        model = model or TaskModel(catalog)
         note = HOLDS if replays(model, witness) else FAILS
         caveat = f"{witness.caveat}; {note}" if witness.caveat else note
-        out.append(replace(finding, witness=replace(witness, caveat=caveat)))
-    return out
+        yield replace(finding, witness=replace(witness, caveat=caveat))

@@ -16,7 +16,7 @@ from aeroexec.recording.foxglove import (
     MARKER_HALF_SIZE,
     VEHICLE_COLOR,
 )
-from aeroexec.recording.reader import Recording
+from aeroexec.recording.reader import Recording, attachment_place
 from aeroexec.vehicles.world import World, parse_world
 from aeroexec.viz.layout import Layout
 
@@ -36,7 +36,9 @@ def recorded_world(recording: Recording) -> tuple[World | None, str | None]:
     if attachment is None:
         return None, f"no {WORLD_ATTACHMENT} attachment: no markers shown"
     try:
-        return parse_world(attachment.text, f"{recording.name}:{WORLD_ATTACHMENT}"), None
+        return parse_world(
+            attachment.text, attachment_place(recording.name, WORLD_ATTACHMENT)
+        ), None
     except WorldError as exc:
         return None, f"{WORLD_ATTACHMENT} attachment unreadable ({exc}): no markers shown"
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from aeroexec.catalog.model import Severity
 from aeroexec.verifier.findings import Finding, InputError, Report
+from aeroexec.verifier.report.text import more_line
 
 _COMMANDS = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.INFO: "notice"}
 
@@ -49,4 +50,9 @@ def format_input_error(error: InputError) -> str:
 def render(report: Report, *, witness: bool = False) -> str:
     lines = [format_input_error(e) for e in report.input_errors]
     lines += [format_finding(f, witness=witness) for f in report.findings]
+    # Beyond --max-findings: one notice per rule, as the text report's "... and N more".
+    lines += [
+        f"::notice title={escape_property(rule)}::{escape_data(more_line(rule, count).strip())}"
+        for rule, count in report.omitted_by_rule().items()
+    ]
     return "".join(line + "\n" for line in lines)

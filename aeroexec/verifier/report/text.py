@@ -47,10 +47,23 @@ def render(report: Report, *, witness: bool = False, color: bool = False) -> str
     if report.input_errors and not (report.catalogs or report.missions):
         return ""
     lines: list[str] = []
-    for finding in report.findings:
+    omitted = report.omitted_by_rule()
+    last = {f.rule: i for i, f in enumerate(report.findings) if f.rule in omitted}
+    for index, finding in enumerate(report.findings):
         lines.append(format_finding(finding, color=color))
         lines += [f"{note.location}: note: {note.message}" for note in finding.related]
         if witness and finding.witness is not None:
             lines.append(f"    witness: {finding.witness.describe()}")
+        if last.get(finding.rule) == index:
+            lines.append(more_line(finding.rule, omitted[finding.rule]))
+    lines += [more_line(rule, count) for rule, count in omitted.items() if rule not in last]
     lines.append(summary_line(report, report.hidden))
     return "\n".join(lines) + "\n"
+
+
+def more_line(rule: str, count: int) -> str:
+    """What stands for the findings of `rule` beyond --max-findings."""
+    return (
+        f"  … and {count:,} more {rule} {'finding' if count == 1 else 'findings'} "
+        "(--max-findings; -f json or sarif lists them all)"
+    )

@@ -204,19 +204,31 @@ def asymmetric_incompatibility_cycle(graphs: CatalogGraphs) -> Iterator[Finding]
 def dead_list(graphs: CatalogGraphs) -> Iterator[Finding]:
     named = graphs.list_namers
     lists = graphs.catalog.lists
-    misspelt: dict[str, list[str]] = {}
-    for name in named:
-        if name not in lists:
-            close = graphs.list_names.best(name)
-            if close is not None:
-                misspelt.setdefault(close, []).append(name)
-    for name, lst in lists.items():
-        if name in named:
-            continue
+    dead = [name for name in lists if name not in named]
+    if not dead:
+        return
+    # Dead list -> the first undefined name (catalog order) that looks like it, and
+    # the behaviors that name that one.
+    misspelt: dict[str, str] = {}
+    for behavior in graphs.catalog.behaviors.values():
+        for name in behavior.incompatible_lists:
+            if name not in lists:
+                close = graphs.list_names.best(name)
+                if close is not None and close not in misspelt:
+                    misspelt[close] = name
+    wrong_namers: dict[str, list[str]] = {wrong: [] for wrong in misspelt.values()}
+    for behavior_name, behavior in graphs.catalog.behaviors.items():
+        named = {n for n in behavior.incompatible_lists if n in wrong_namers}
+        for name in behavior.incompatible_lists:
+            if name in named:
+                named.discard(name)
+                wrong_namers[name].append(behavior_name)
+    for name in dead:
+        lst = lists[name]
         hint = ""
         if name in misspelt:
-            wrong = misspelt[name][0]
-            namers = named[wrong]
+            wrong = misspelt[name]
+            namers = tuple(wrong_namers[wrong])
             verb = "names" if len(namers) == 1 else "name"
             hint = f" ({_names(namers)} {verb} '{wrong}': a misspelling of it?)"
         yield graphs.finding(

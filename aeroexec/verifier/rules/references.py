@@ -3,6 +3,7 @@ named twice."""
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Container, Iterator, Sequence
 
 from aeroexec.catalog.model import Severity
@@ -47,11 +48,35 @@ def _dangling(
     definitions: Sequence[Definition], field: str, defined: Container[str]
 ) -> Iterator[tuple[Definition, int, str]]:
     """(definition, index, name) for each name in the entries' `field` that is not in
-    `defined`: the one loop every undefined-reference rule walks."""
+    `defined`, at its first place in the entry (a repetition is AX206's): the one loop
+    every undefined-reference rule walks."""
     for definition in definitions:
-        for index, name in enumerate(getattr(definition.item, field)):
+        for index, name in _first_places(getattr(definition.item, field)):
             if name not in defined:
                 yield definition, index, name
+
+
+def _repeated(names: Sequence[str]) -> set[str]:
+    """The names `names` holds more than once. From a sorted copy (eight bytes a name)
+    rather than a set of every name: a list can be a million names long."""
+    if len(names) <= 64:  # the usual list: a few names, most often none repeated
+        if len(set(names)) == len(names):
+            return set()
+        return {n for i, n in enumerate(names) if n in names[:i]}
+    ordered = sorted(names)
+    return {a for a, b in itertools.pairwise(ordered) if a == b}
+
+
+def _first_places(names: Sequence[str]) -> Iterator[tuple[int, str]]:
+    """(index, name) for the first place of each name in `names`."""
+    repeated = _repeated(names)
+    seen: set[str] = set()
+    for index, name in enumerate(names):
+        if name in repeated:
+            if name in seen:
+                continue
+            seen.add(name)
+        yield index, name
 
 
 def _capability_detail(graphs: CatalogGraphs, name: str) -> str:
@@ -82,7 +107,7 @@ def undefined_list(graphs: CatalogGraphs) -> Iterator[Finding]:
             E,
             f"{behavior.name}: incompatible list '{name}' is not defined{detail}; "
             f"{behavior.name} preempts nothing through it{_replaced(definition, 'behavior')}",
-            behavior.mark_of(f"incompatible_lists.{index}"),
+            behavior.item_mark("incompatible_lists", index),
             (behavior.name, name),
         )
 
@@ -112,7 +137,7 @@ def list_member_not_a_behavior(graphs: CatalogGraphs) -> Iterator[Finding]:
             "AX202",
             E,
             message + _replaced(definition, "list"),
-            lst.mark_of(f"behaviors.{index}"),
+            lst.item_mark("behaviors", index),
             (lst.name, member),
         )
 
@@ -140,7 +165,7 @@ def undefined_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
             E,
             f"{behavior.name}: capability '{name}' is not defined{detail}: every "
             f"activation of {behavior.name} is rejected{_replaced(definition, 'behavior')}",
-            behavior.mark_of(f"capabilities.{index}"),
+            behavior.item_mark("capabilities", index),
             (behavior.name, name),
             witness,
         )
@@ -167,7 +192,7 @@ def undefined_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding
             f"capability {spec.name}: incompatible capability '{name}' is not "
             f"defined{_capability_detail(graphs, name)}; the conflict it declares is never "
             "checked",
-            spec.mark_of(f"incompatible_capabilities.{index}"),
+            spec.item_mark("incompatible_capabilities", index),
             (spec.name, name),
         )
 
@@ -201,7 +226,7 @@ def undefined_required_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
             E,
             f"capability {spec.name} requires '{name}', which is not defined"
             f"{_capability_detail(graphs, name)}{consequence}",
-            spec.mark_of(f"required_capabilities.{index}"),
+            spec.item_mark("required_capabilities", index),
             (spec.name, name, *affected),
             witness,
         )
@@ -228,7 +253,8 @@ def _users_by_capability(graphs: CatalogGraphs) -> dict[str, tuple[str, ...]]:
     return {k: tuple(v) for k, v in result.items()}
 
 
-MarkOf = Callable[[str], Mark]
+#: The mark of item `index` of list `field` of an entry (`BehaviorDescriptor.item_mark`).
+MarkOf = Callable[[str, int], Mark]
 
 
 def _repeats(
@@ -239,18 +265,27 @@ def _repeats(
     names: Sequence[str],
     mark_of: MarkOf,
 ) -> Iterator[Finding]:
+    repeated = _repeated(names)
+    if not repeated:
+        return
     first: dict[str, int] = {}
+    second: dict[str, int] = {}
+    count: dict[str, int] = {}
     for index, name in enumerate(names):
-        if name not in first:
-            first[name] = index
-            continue
-        earlier = mark_of(f"{field}.{first[name]}")
+        if name in repeated:
+            first.setdefault(name, index)
+            if index != first[name]:
+                second.setdefault(name, index)
+            count[name] = count.get(name, 0) + 1
+    for name, index in second.items():
+        earlier = mark_of(field, first[name])
         at = f" (first at line {earlier.line})" if earlier.line else ""
+        times = "twice" if count[name] == 2 else f"{count[name]:,} times"
         yield graphs.finding(
             "AX206",
             W,
-            f"{owner}: '{name}' is named twice in {field}{at}",
-            mark_of(f"{field}.{index}"),
+            f"{owner}: '{name}' is named {times} in {field}{at}",
+            mark_of(field, index),
             (subject, name),
         )
 
@@ -264,7 +299,9 @@ def _repeats(
     `incompatible_capabilities` or `required_capabilities`. In flight: nothing
     (capabilities are referenced once per behavior, processes started once), but the
     repetition usually hides a different name that was meant, whose effect is missing.
-    Fix: remove the repetition or correct it to the name that was meant.""",
+    Reported once per repeated name, at its second place, with how many times it is
+    named (an undefined name is reported once too, at its first place). Fix: remove the
+    repetition or correct it to the name that was meant.""",
 )
 def repeated_reference(graphs: CatalogGraphs) -> Iterator[Finding]:
     for b in graphs.behavior_defs:
@@ -272,12 +309,12 @@ def repeated_reference(graphs: CatalogGraphs) -> Iterator[Finding]:
         for field in ("incompatible_lists", "capabilities"):
             names = getattr(behavior, field)
             yield from _repeats(
-                graphs, behavior.name, behavior.name, field, names, behavior.mark_of
+                graphs, behavior.name, behavior.name, field, names, behavior.item_mark
             )
     for entry in graphs.list_defs:
         lst = entry.item
         yield from _repeats(
-            graphs, f"list {lst.name}", lst.name, "behaviors", lst.behaviors, lst.mark_of
+            graphs, f"list {lst.name}", lst.name, "behaviors", lst.behaviors, lst.item_mark
         )
     for c in graphs.capability_defs:
         spec = c.item
@@ -288,5 +325,5 @@ def repeated_reference(graphs: CatalogGraphs) -> Iterator[Finding]:
                 spec.name,
                 field,
                 getattr(spec, field),
-                spec.mark_of,
+                spec.item_mark,
             )
