@@ -31,6 +31,7 @@ from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
 from aeroexec.vehicles.mavlink.codec import new_codec
+from aeroexec.vehicles.mavlink.vehicle import STILL_SPEED
 
 SPEED = "5"  # mavsim runs the vehicle 5x faster than the wall clock ...
 HEARTBEAT_HZ = "4"  # ... and beats 4 times a second, so arming and modes show sooner
@@ -243,6 +244,42 @@ def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
     assert [c["result"] for c in modes] == ["ACCEPTED", "ACCEPTED"]  # GUIDED, then LAND
     assert stats["final"]["mode"] == "LAND" and not stats["final"]["flying"]
     assert stats["final"]["position"][1] < 39.0
+
+
+def test_a_failsafe_hold_is_reported_only_once_the_autopilot_shows_it_still(
+    tmp_path: Path, procs: list[Proc]
+) -> None:
+    """`--failsafe hold` brakes with a zero-velocity setpoint: sent is not stopped, so
+    `failsafe_seen` waits for the autopilot's own velocity below `STILL_SPEED`."""
+    port = free_udp_port()
+    stats_path = tmp_path / "mavsim.json"
+    mavsim = start_mavsim(procs, port, stats_path, "--drop-heartbeats-at", "1.2", "--drop-for", "2")
+    mission = write_mission(
+        tmp_path,
+        "    took_off = api.executeBehavior('TAKE_OFF')\n"
+        "    went = api.executeBehavior('GO_TO_POINT', coordinates=[0, 40, 1])\n"
+        "    api.executeBehavior('WAIT', duration=2)\n"
+        "    return took_off, went\n",
+    )
+    memory = MemoryObserver()
+    result = fly(
+        FlightConfig(
+            mission=mission,
+            connect=f"udpin:127.0.0.1:{port}",
+            heartbeat_timeout=1.0,
+            failsafe="hold",
+        ),
+        observers=[memory],
+    )
+    stop_mavsim(mavsim, stats_path)
+
+    assert result.outcome.value == ("GOAL_ACHIEVED", "PROCESS_FAILURE")
+    link = memory.topics("mavlink/link")
+    events = [e["event"] for e in link]
+    assert events[:5] == ["connected", "lost", "restored", "failsafe", "failsafe_seen"], events
+    seen = link[4]
+    assert seen["mode"] == "GUIDED" and seen["speed"] <= STILL_SPEED
+    assert not [e for e in link if e["event"] == "failsafe_unconfirmed"]
     assert not result.final_state.flying
 
 

@@ -42,7 +42,7 @@ from aeroexec.interrupts import Interrupted
 from aeroexec.mission.api import MissionAPI
 from aeroexec.vehicles.base import VehicleCommandError
 from aeroexec.vehicles.mavlink.convert import BRAKE, GUIDED, LAND, mode_name
-from aeroexec.vehicles.mavlink.vehicle import LinkTimeout, MavlinkVehicle
+from aeroexec.vehicles.mavlink.vehicle import STILL_SPEED, LinkTimeout, MavlinkVehicle
 
 OnExit = Literal["land", "hold", "none"]
 ON_EXIT: tuple[OnExit, ...] = ("land", "hold", "none")
@@ -54,9 +54,7 @@ LANDING_MARGIN_S = 20.0
 LANDING_RATE = 0.25
 #: An RTL first flies home (WPNAV_SPEED, 5 m/s by default): at least this speed (m/s).
 RETURN_RATE = 1.0
-#: Slower than this (m/s), as the autopilot's LOCAL_POSITION_NED says, is standing still.
-STILL_SPEED = 0.3
-#: ... for this long in a row (s): then a brake (a hold) is confirmed.
+#: Slower than `STILL_SPEED` for this long in a row (s): then a brake (a hold) is confirmed.
 STILL_FOR_S = 1.0
 #: A brake must be seen to stop within this (s), plus `BRAKE_PER_SPEED_S` per m/s.
 BRAKE_BOUND_S = 8.0

@@ -75,6 +75,12 @@ GCS_HEARTBEAT_MAX_HZ = 20.0
 MAX_BUFFERED = 100_000
 #: A failsafe's mode must show in a HEARTBEAT within this (s) of its COMMAND_ACK.
 FAILSAFE_BOUND_S = 5.0
+#: A hold (the failsafe's, or an ending's brake) is seen when the vehicle is slower
+#: than this (m/s), by the autopilot's own LOCAL_POSITION_NED.
+STILL_SPEED = 0.3
+#: How long a `--failsafe hold` may take to be seen still: braking in GUIDED from a
+#: copter's cruise speed takes ArduCopter several seconds (docs/mavlink.md).
+HOLD_BOUND_S = 15.0
 #: STATUSTEXTs kept (the older half is dropped when full).
 MAX_TEXTS = 200
 
@@ -197,9 +203,9 @@ class MavlinkVehicle:
         #: When the current loss began (the last heartbeat before it), or None.
         self.lost_since: float | None = None
         self._failsafe_pending = False
-        #: A failsafe mode change not yet seen in a HEARTBEAT: (mode, heartbeats before
-        #: it, when it was acknowledged, deadline).
-        self._failsafe_watch: tuple[int, int, float, float] | None = None
+        #: A failsafe not yet seen done: (mode, heartbeats before it, when it was
+        #: acknowledged, deadline, whether it is a hold, to be seen still too).
+        self._failsafe_watch: tuple[int, int, float, float, bool] | None = None
         #: Why the last failsafe was not confirmed ("" when it was, or none ran).
         self.failsafe_problem = ""
         self._acks: list[MAVLinkMessage] = []
@@ -371,12 +377,22 @@ class MavlinkVehicle:
             self._failsafe_pending = False
             self._run_failsafe()
         watch = self._failsafe_watch
+        if watch is not None and watch[4]:
+            self._see_failsafe(watch)
+            watch = self._failsafe_watch
         if watch is not None and self._clock() > watch[3]:
             self._failsafe_watch = None
-            self.failsafe_problem = (
-                f"failsafe {mode_name(watch[0])} not confirmed: the autopilot still says "
-                f"{self.telemetry.heard_mode_name} {FAILSAFE_BOUND_S:g} s after acknowledging it"
-            )
+            if watch[4] and self.telemetry.heard_mode == watch[0]:
+                self.failsafe_problem = (
+                    f"failsafe hold not confirmed: still moving at {self.telemetry.speed:.1f} "
+                    f"m/s {watch[3] - watch[2]:g} s after the brake"
+                )
+            else:
+                self.failsafe_problem = (
+                    f"failsafe {mode_name(watch[0])} not confirmed: the autopilot still says "
+                    f"{self.telemetry.heard_mode_name} {watch[3] - watch[2]:g} s after "
+                    "acknowledging it"
+                )
             self._event("failsafe_unconfirmed", mode=mode_name(watch[0]))
             self._log(self.failsafe_problem, "ERROR")
         limit = self.config.link_timeout
@@ -436,18 +452,8 @@ class MavlinkVehicle:
     def _heartbeat(self, item: Received) -> None:
         self.telemetry.apply(item.msg)
         self._last_heartbeat = self._clock()
-        watch = self._failsafe_watch
-        if (
-            watch is not None
-            and self.telemetry.heartbeats > watch[1]
-            and self.telemetry.heard_mode == watch[0]
-        ):
-            self._failsafe_watch = None
-            self._event(
-                "failsafe_seen",
-                mode=mode_name(watch[0]),
-                after_s=round(self._last_heartbeat - watch[2], 3),
-            )
+        if self._failsafe_watch is not None:
+            self._see_failsafe(self._failsafe_watch)
         # Answer each autopilot heartbeat with ours (at most GCS_HEARTBEAT_MAX_HZ): an
         # autopilot that beats faster than 1 Hz runs faster than the wall clock (SITL
         # with a speed-up), and its GCS failsafe (FS_GCS_TIMEOUT) counts on its clock.
@@ -504,6 +510,20 @@ class MavlinkVehicle:
         if self._velocity_ned is not None and now >= self._next_velocity and not self.link_lost:
             self._send_velocity(self._velocity_ned)
 
+    def _see_failsafe(self, watch: tuple[int, int, float, float, bool]) -> None:
+        """The failsafe is seen done: a HEARTBEAT after it in its mode and, for a hold,
+        the vehicle slower than `STILL_SPEED`."""
+        mode, beats, since, _, hold = watch
+        if self.telemetry.heartbeats <= beats or self.telemetry.heard_mode != mode:
+            return
+        if hold and self.telemetry.speed > STILL_SPEED:
+            return
+        self._failsafe_watch = None
+        seen: dict[str, Any] = {"mode": mode_name(mode)}
+        if hold:
+            seen["speed"] = round(self.telemetry.speed, 2)
+        self._event("failsafe_seen", **seen, after_s=round(self._clock() - since, 3))
+
     def _run_failsafe(self) -> None:
         self._velocity_ned = None
         if not self.telemetry.flying:
@@ -519,10 +539,13 @@ class MavlinkVehicle:
             elif self.telemetry.custom_mode == GUIDED:
                 self._brake()
             if self.config.failsafe != "hold" or self.telemetry.custom_mode == GUIDED:
-                # Acknowledged is not done: watch the HEARTBEATs for the mode.
+                # Acknowledged is not done: watch the HEARTBEATs for the mode, and for a
+                # hold the autopilot's own velocity too (sent is not stopped).
                 now = self._clock()
                 mode = self.telemetry.custom_mode
-                self._failsafe_watch = (mode, beats, now, now + FAILSAFE_BOUND_S)
+                hold = self.config.failsafe == "hold"
+                bound = HOLD_BOUND_S if hold else FAILSAFE_BOUND_S
+                self._failsafe_watch = (mode, beats, now, now + bound, hold)
             # hold outside GUIDED: the autopilot's own failsafe (LAND, RTL) or a pilot
             # has the vehicle; a setpoint would be ignored, and taking over is not ours.
             self._event("failsafe", action=self.config.failsafe, mode=self.telemetry.mode)
