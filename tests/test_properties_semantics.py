@@ -205,6 +205,36 @@ def test_timed_until_looks_exactly_its_window_ahead() -> None:
     assert semantics.series(short.tree, data, 10).shape == (10,)
 
 
+@pytest.mark.parametrize(
+    ("text", "same_as"),
+    [
+        # Where RTAMT's parser crashed, the text means what it says.
+        (
+            "(altitude > 0.3) unless (speed > 0.6)",
+            "always(altitude > 0.3) or (altitude > 0.3) until (speed > 0.6)",
+        ),
+        ("always[0 s:1](speed < 0.9)", "always[0:1](speed < 0.9)"),
+        # Short forms, symbols, units and separators are the words they stand for.
+        (
+            "G[100ms:500ms](altitude > 0.2) -> F(speed > 0.5)",
+            "always[0.1:0.5](altitude > 0.2) implies eventually(speed > 0.5)",
+        ),
+        (
+            "!(altitude > 0.5) & (speed < 0.5) | (battery > 0.5)",
+            "not(altitude > 0.5) and (speed < 0.5) or (battery > 0.5)",
+        ),
+        ("altitude - speed + battery > 0", "altitude - (speed + battery) > 0"),  # RTAMT's levels
+    ],
+)
+def test_texts_that_mean_the_same(text: str, same_as: str) -> None:
+    data = columns(11)
+    np.testing.assert_array_equal(ours(text, data), ours(same_as, data))
+    assert (
+        ours("altitude - speed + battery > 0", data).tolist()
+        != ours("(altitude - speed) + battery > 0", data).tolist()
+    )
+
+
 def test_the_engine_never_loads_rtamt_or_antlr() -> None:
     code = (
         "import sys\n"
