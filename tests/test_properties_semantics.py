@@ -67,7 +67,8 @@ def rtamt_series(text: str, data: dict[str, np.ndarray]) -> np.ndarray:
     """RTAMT's own offline robustness of `text` on `data`, sampled every 0.1 s (an
     RTAMTException where RTAMT's parser refuses the text)."""
     rtamt = pytest.importorskip(
-        "rtamt", reason="RTAMT, the reference, installs on Python < 3.12 only (pyproject.toml)"
+        "rtamt",
+        reason="RTAMT, the reference, is not installed (the test extra has it on Python < 3.12)",
     )
     spec = rtamt.StlDiscreteTimeOfflineSpecification()
     names = [n for n in data if n in text]
