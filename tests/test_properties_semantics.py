@@ -41,6 +41,8 @@ FORMULAS = [
     "(altitude > 0.2) since[0.3:1.2] (speed > 0.8)",
     "(altitude > 0.2) U[0.2:0.4] (speed > 0.8) or (battery < 0.5) S (speed > 0.5)",
     "(altitude > 0.2) unless[0.1:0.5] (speed > 0.8)",
+    "(altitude > 0.2) W[0:0.3] (speed > 0.8)",
+    "eventually[0 us:300000 us](speed > 0.9) or once[0 ns:200000000 ns](battery > 0.7)",
     "not(altitude >= 0.5) iff (speed < 0.5)",
     "(altitude >= 0.5) xor (speed < 0.5)",
     "!(altitude > 0.5) | (speed < 0.3) & (battery > 0.4) -> (altitude < 0.7) <-> (speed > 0.1)",
