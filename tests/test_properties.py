@@ -187,7 +187,15 @@ def test_a_satisfied_boundary_is_told_from_a_violation() -> None:
         ("from os import path", 14, "'from' has no place"),
         ("always(x) ; import os", 21, "unknown signal 'x'"),
         ("always(altitude <= 1", 34, "syntax error"),
-        ("always[0:0.05](altitude <= 1)", 14, "multiple of the sampling period"),
+        # The bound itself (RTAMT's own error had no place: the formula's start).
+        ("always[0:0.05](altitude <= 1)", 23, "multiple of the sampling period"),
+        ("always[0.5:0.2](altitude <= 1)", 21, "start is after its end"),
+        ("always(altitude != 1)", 30, "'!=='"),
+        ("always(altitude/2 <= 1)", 21, "unknown signal 'altitude/2'"),  # RTAMT's names
+        ("always(altitude <= 1) always(speed <= 1)", 36, "expected the end of the formula"),
+        ("always(altitude <= 0x10)", 33, "decimal"),
+        ("always(altitude <= 1))", 35, "found ')'"),
+        ("", 14, "empty formula"),
     ],
 )
 def test_a_bad_formula_is_one_error_at_its_column(text, column, words) -> None:

@@ -1,6 +1,6 @@
 """`--spec FILE`: properties for `check`, `run`, `fly` and `replay --check`.
 
-The properties package (RTAMT and its ANTLR runtime) is imported only when a command is
+The properties package (and numpy, its arrays) is imported only when a command is
 given --spec (or is `check`): `aeroexec run` without it starts as fast as before.
 """
 

@@ -50,7 +50,7 @@ ABSOLUTE_NS = 10**18
 class Verdict:
     property: Property
     status: str  # held | violated | missing
-    #: RTAMT's robustness at time 0 (None when signals were missing).
+    #: The robustness at time 0, RTAMT's definition (None when signals were missing).
     robustness: float | None = None
     #: The first violating interval, first and last sample time in seconds.
     interval_s: tuple[float, float] | None = None

@@ -1,278 +1,210 @@
-"""RTAMT's discrete-time offline semantics, computed on numpy arrays.
+"""RTAMT's discrete-time offline semantics of STL, computed on numpy arrays.
 
-RTAMT's own offline visitor works sample by sample on Python lists: about 0.1-0.6 s per
-property on a one-hour recording (36,000 samples), 20 properties some 4 s, ten times the
-cost of reading the channels (benchmarks/properties.py). This subclass of that visitor
-computes the same operators on whole arrays (cumulative and sliding-window min/max), and
-falls back to RTAMT's own code, unchanged, for the operators it does not vectorize
-(timed until and since). `tests/test_properties_semantics.py` holds it to RTAMT's results
-on every operator.
+The definitions are RTAMT 0.4.10's (its offline monitors, `rtamt.semantics.stl.
+discrete_time.offline`), operator by operator: the robustness of `a <= b` is `b - a`,
+`and`/`or` are min/max, `implies` is max(-a, b), `iff` and `xor` are -|a - b| and |a - b|,
+`always[a:b] x` at sample i is the min of x over samples i+a..i+b (samples past the end
+count as +inf, so a window cut off by the end is judged on what it holds), `once[a:b]`
+the max over i-b..i-a (before the start: -inf), `a until[a:b] c` is the max over d in
+a..b of min(c at i+d, a over i..i+d-1), `prev` and `next` read the neighbouring sample
+(+inf past either end), `rise(x)` = min(not prev'(x), x) with -inf before the start.
+tests/test_properties_semantics.py holds every operator to RTAMT's own monitors, sample
+by sample, where RTAMT is installed.
+
+What differs is only the cost: RTAMT works sample by sample on Python lists, and its
+timed until/since are O(n·w²); here each operator is a few array operations (cumulative
+and sliding-window min/max, and O(n·w) for timed until/since).
 
 `boolean=True` maps each comparison to +1 (true) or -1 (false) instead of its robustness:
-RTAMT's min/max operators then compute the Boolean semantics exactly (see formula.py).
+the min/max operators then compute the Boolean semantics exactly (see formula.py), and
+`iff`/`xor` use their truth tables.
 """
 
 from __future__ import annotations
 
 import operator
-from typing import Any
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-from rtamt.semantics.abstract_discrete_time_offline_interpreter import (
-    discrete_time_offline_interpreter_factory,
-)
-from rtamt.semantics.stl.discrete_time.offline.ast_visitor import (
-    StlDiscreteTimeOfflineAstVisitor,
-)
 
+from aeroexec.properties import nodes
+
+Array = np.ndarray
 _INF = float("inf")
-_TESTS = {
+_TESTS: dict[str, Callable[[Array, Array], Array]] = {
     "<": operator.lt,
     "<=": operator.le,
     "==": operator.eq,
-    "!=": operator.ne,
+    "!==": operator.ne,
     ">": operator.gt,
     ">=": operator.ge,
 }
-Array = np.ndarray
 
 
-class _ArrayVisitor(StlDiscreteTimeOfflineAstVisitor):  # type: ignore[misc]
-    boolean = False
+def series(
+    node: nodes.Node, columns: Mapping[str, Array], length: int, *, boolean: bool = False
+) -> Array:
+    """The value of `node` at every one of `length` samples of `columns` (float arrays,
+    one per signal the node reads): its robustness, or with `boolean` its truth as +1/-1."""
+    with np.errstate(all="ignore"):  # sqrt(-1), x/0: nan and inf, as the formula says
+        return _Evaluation(columns, length, boolean).value(node)
 
-    def visit(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        # RTAMT dispatches through two chains of isinstance tests per node; an online
-        # check of a few ticks spends most of its time there. The method named after the
-        # node's class is the one those chains find (RTAMT's naming), so go there at once.
-        method = getattr(self, "visit" + type(node).__name__, None)
-        if method is None:
-            return super().visit(node, *args, **kwargs)
-        result = method(node, *args, **kwargs)
-        self.ast.offline_results[node] = result
-        return result
 
-    # -- atoms --------------------------------------------------------------------------------
-    def visitPredicate(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left = self.visit(node.children[0], *args, **kwargs)
-        right = self.visit(node.children[1], *args, **kwargs)
-        op = str(node.operator)
+class _Evaluation:
+    def __init__(self, columns: Mapping[str, Array], length: int, boolean: bool) -> None:
+        self.columns = columns
+        self.length = length
+        self.boolean = boolean
+
+    def value(self, node: nodes.Node) -> Array:
+        return _RULES[type(node)](self, node)
+
+    # -- atoms ------------------------------------------------------------------------------------
+    def signal(self, node: nodes.Signal) -> Array:
+        return np.asarray(self.columns[node.name], dtype=float)
+
+    def constant(self, node: nodes.Constant) -> Array:
+        return np.full(self.length, node.value)
+
+    def compare(self, node: nodes.Compare) -> Array:
+        left, right = self.value(node.left), self.value(node.right)
         if self.boolean:
-            return np.where(_TESTS[op](left, right), 1.0, -1.0)
-        if op == "==":
+            return np.where(_TESTS[node.op](left, right), 1.0, -1.0)
+        if node.op == "==":
             return -np.abs(left - right)
-        if op == "!=":
+        if node.op == "!==":
             return np.abs(left - right)
-        if op in ("<", "<="):
+        if node.op in ("<", "<="):
             return right - left
         return left - right
 
-    def visitVariable(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.asarray(self.ast.var_object_dict[node.var], dtype=float)
+    # -- arithmetic -------------------------------------------------------------------------------
+    def arithmetic(self, node: nodes.Arithmetic) -> Array:
+        left, right = self.value(node.left), self.value(node.right)
+        if node.op == "+":
+            return left + right
+        if node.op == "-":
+            return left - right
+        if node.op == "*":
+            return left * right
+        if node.op == "/":
+            return left / right
+        return np.power(left, right)
 
-    def visitConstant(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.full(args[0], float(node.val))
+    def function(self, node: nodes.Function) -> Array:
+        inner = self.value(node.child)
+        return {"abs": np.abs, "sqrt": np.sqrt, "exp": np.exp}[node.op](inner)
 
-    # -- arithmetic ---------------------------------------------------------------------------
-    def visitAbs(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.abs(self.visit(node.children[0], *args, **kwargs))
-
-    def visitSqrt(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.sqrt(self.visit(node.children[0], *args, **kwargs))
-
-    def visitExp(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.exp(self.visit(node.children[0], *args, **kwargs))
-
-    def visitPow(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.power(*self._pair(node, args, kwargs))
-
-    def visitAddition(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return left + right
-
-    def visitSubtraction(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return left - right
-
-    def visitMultiplication(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return left * right
-
-    def visitDivision(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return left / right
-
-    # -- Boolean ------------------------------------------------------------------------------
-    def visitNot(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return -self.visit(node.children[0], *args, **kwargs)
-
-    def visitAnd(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.minimum(*self._pair(node, args, kwargs))
-
-    def visitOr(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.maximum(*self._pair(node, args, kwargs))
-
-    def visitImplies(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return np.maximum(-left, right)
-
-    def visitIff(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return -np.abs(left - right)
-
-    def visitXor(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
+    # -- Boolean ----------------------------------------------------------------------------------
+    def connective(self, node: nodes.Connective) -> Array:
+        left, right = self.value(node.left), self.value(node.right)
+        if node.op == "and":
+            return np.minimum(left, right)
+        if node.op == "or":
+            return np.maximum(left, right)
+        if node.op == "implies":
+            return np.maximum(-left, right)
+        if self.boolean:  # -|l - r| and |l - r| are 0 or 2 on +1/-1: say it directly
+            same = (left > 0) == (right > 0)
+            return np.where(same if node.op == "iff" else ~same, 1.0, -1.0)
+        if node.op == "iff":
+            return -np.abs(left - right)
         return np.abs(left - right)
 
-    # -- untimed temporal ---------------------------------------------------------------------
-    def visitEventually(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        sample = self.visit(node.children[0], *args, **kwargs)
-        return np.maximum.accumulate(sample[::-1])[::-1]
+    def unary(self, node: nodes.Unary) -> Array:
+        inner = self.value(node.child)
+        if node.op == "not":
+            return -inner
+        if node.op == "rise":
+            return np.minimum(-_behind(inner, 1, -_INF), inner)
+        if node.op == "fall":
+            return np.minimum(_behind(inner, 1, _INF), -inner)
+        if node.op == "prev":
+            return _behind(inner, 1, _INF)
+        return _ahead(inner, 1, _INF)  # next
 
-    def visitAlways(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        sample = self.visit(node.children[0], *args, **kwargs)
-        return np.minimum.accumulate(sample[::-1])[::-1]
+    # -- temporal ---------------------------------------------------------------------------------
+    def temporal(self, node: nodes.Temporal) -> Array:
+        inner = self.value(node.child)
+        op, window = node.op, node.window
+        if window is None:
+            if op == "always":
+                return np.minimum.accumulate(inner[::-1])[::-1]
+            if op == "eventually":
+                return np.maximum.accumulate(inner[::-1])[::-1]
+            if op == "historically":
+                return np.minimum.accumulate(inner)
+            return np.maximum.accumulate(inner)  # once
+        if op == "always":
+            return _window_ahead(inner, window, np.min, _INF)
+        if op == "eventually":
+            return _window_ahead(inner, window, np.max, -_INF)
+        if op == "historically":
+            return _window_behind(inner, window, np.min, _INF)
+        return _window_behind(inner, window, np.max, -_INF)  # once
 
-    def visitOnce(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.maximum.accumulate(self.visit(node.children[0], *args, **kwargs))
-
-    def visitHistorically(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return np.minimum.accumulate(self.visit(node.children[0], *args, **kwargs))
-
-    def visitUntil(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = (a.tolist() for a in self._pair(node, args, kwargs))
-        out = [0.0] * len(left)
-        following = -_INF
-        for i in range(len(left) - 1, -1, -1):
-            following = max(min(left[i], following), right[i])
-            out[i] = following
+    def between(self, node: nodes.Between) -> Array:
+        left, right = self.value(node.left), self.value(node.right)
+        if node.window is not None:
+            return _timed(left, right, node.window, future=node.op == "until")
+        # Untimed: out[i] = max(right[i], min(left[i], out[i +/- 1])), a scan.
+        lefts, rights = left.tolist(), right.tolist()
+        out = [0.0] * len(lefts)
+        carried = -_INF
+        order = range(len(lefts) - 1, -1, -1) if node.op == "until" else range(len(lefts))
+        for i in order:
+            carried = max(min(lefts[i], carried), rights[i])
+            out[i] = carried
         return np.asarray(out, dtype=float)
 
-    def visitSince(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = (a.tolist() for a in self._pair(node, args, kwargs))
-        out = [0.0] * len(left)
-        before = -_INF
-        for i in range(len(left)):
-            before = max(min(left[i], before), right[i])
-            out[i] = before
-        return np.asarray(out, dtype=float)
 
-    def visitRise(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        sample = self.visit(node.children[0], *args, **kwargs)
-        return np.minimum(-_shift_right(sample, -_INF), sample)
-
-    def visitFall(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        sample = self.visit(node.children[0], *args, **kwargs)
-        return np.minimum(_shift_right(sample, _INF), -sample)
-
-    def visitPrevious(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return _shift_right(self.visit(node.children[0], *args, **kwargs), _INF)
-
-    def visitStrongPrevious(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return _shift_right(self.visit(node.children[0], *args, **kwargs), -_INF)
-
-    def visitNext(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return _shift_left(self.visit(node.children[0], *args, **kwargs), _INF)
-
-    def visitStrongNext(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return _shift_left(self.visit(node.children[0], *args, **kwargs), -_INF)
-
-    # -- timed temporal: sliding windows --------------------------------------------------------
-    def visitTimedEventually(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return self._ahead(node, args, kwargs, np.max, -_INF)
-
-    def visitTimedAlways(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return self._ahead(node, args, kwargs, np.min, _INF)
-
-    def visitTimedOnce(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return self._behind(node, args, kwargs, np.max, -_INF)
-
-    def visitTimedHistorically(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return self._behind(node, args, kwargs, np.min, _INF)
-
-    def visitTimedUntil(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return self._rtamt(StlDiscreteTimeOfflineAstVisitor.visitTimedUntil, node, args, kwargs)
-
-    def visitTimedSince(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        return self._rtamt(StlDiscreteTimeOfflineAstVisitor.visitTimedSince, node, args, kwargs)
-
-    # -- helpers ------------------------------------------------------------------------------
-    def _pair(self, node: Any, args: Any, kwargs: Any) -> tuple[Array, Array]:
-        return (
-            self.visit(node.children[0], *args, **kwargs),
-            self.visit(node.children[1], *args, **kwargs),
-        )
-
-    def _bounds(self, node: Any) -> tuple[int, int]:
-        begin, end = self.time_unit_transformer(node)
-        return int(begin), int(end)
-
-    def _ahead(self, node: Any, args: Any, kwargs: Any, reduce: Any, pad: float) -> Array:
-        """out[i] = reduce(x[i+begin .. i+end]), the samples past the end as `pad`."""
-        sample = self.visit(node.children[0], *args, **kwargs)
-        begin, end = self._bounds(node)
-        padded = np.concatenate([sample, np.full(end + 1, pad)])
-        windows = sliding_window_view(padded[begin:], end - begin + 1)
-        return reduce(windows[: len(sample)], axis=1)
-
-    def _behind(self, node: Any, args: Any, kwargs: Any, reduce: Any, pad: float) -> Array:
-        """out[i] = reduce(x[i-end .. i-begin]), the samples before the start as `pad`."""
-        sample = self.visit(node.children[0], *args, **kwargs)
-        begin, end = self._bounds(node)
-        padded = np.concatenate([np.full(end, pad), sample])
-        windows = sliding_window_view(padded, end - begin + 1)
-        return reduce(windows[: len(sample)], axis=1)
-
-    def _rtamt(self, method: Any, node: Any, args: Any, kwargs: Any) -> Array:
-        """RTAMT's own list-based code for `node`, its children given as lists."""
-        array_visit = self.visit
-
-        def as_list(child: Any, *a: Any, **k: Any) -> list[float]:
-            del self.visit  # the grandchildren are computed on arrays again
-            try:
-                return list(array_visit(child, *a, **k).tolist())
-            finally:
-                self.visit = as_list
-
-        self.visit = as_list  # RTAMT's methods reach the children through self.visit
-        try:
-            return np.asarray(method(self, node, *args, **kwargs), dtype=float)
-        finally:
-            del self.visit
+_RULES: dict[type, Callable[[_Evaluation, nodes.Node], Array]] = {
+    nodes.Signal: _Evaluation.signal,
+    nodes.Constant: _Evaluation.constant,
+    nodes.Compare: _Evaluation.compare,
+    nodes.Arithmetic: _Evaluation.arithmetic,
+    nodes.Function: _Evaluation.function,
+    nodes.Connective: _Evaluation.connective,
+    nodes.Unary: _Evaluation.unary,
+    nodes.Temporal: _Evaluation.temporal,
+    nodes.Between: _Evaluation.between,
+}  # type: ignore[dict-item]
 
 
-class _BooleanVisitor(_ArrayVisitor):
-    boolean = True
-
-    # -|l - r| and |l - r| are 0 or 2 on +1/-1 values: the Boolean forms say it directly.
-    def visitIff(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return np.where((left > 0) == (right > 0), 1.0, -1.0)
-
-    def visitXor(self, node: Any, *args: Any, **kwargs: Any) -> Array:
-        left, right = self._pair(node, args, kwargs)
-        return np.where((left > 0) != (right > 0), 1.0, -1.0)
-
-
-def _shift_right(sample: Array, fill: float) -> Array:
-    return np.concatenate([[fill], sample[:-1]]) if len(sample) else sample
-
-
-def _shift_left(sample: Array, fill: float) -> Array:
-    return np.concatenate([sample[1:], [fill]]) if len(sample) else sample
+def _timed(left: Array, right: Array, window: nodes.Window, *, future: bool) -> Array:
+    """`left until[a:b] right` (future) or `left since[a:b] right`, in O(n·b):
+    out[i] = max over d in a..b of min(right[i±d], left over the d samples from i towards
+    it, i±d itself excluded); past either end, left is +inf and right -inf."""
+    n = len(left)
+    out = np.full(n, -_INF)
+    held = np.full(n, _INF)  # min of left over the d samples from i towards i±d
+    for d in range(min(window.end, n - 1) + 1):
+        here = slice(0, n - d) if future else slice(d, n)
+        there = slice(d, n) if future else slice(0, n - d)
+        if d >= window.begin:
+            np.maximum(out[here], np.minimum(held[here], right[there]), out=out[here])
+        np.minimum(held[here], left[there], out=held[here])
+    return out
 
 
-def interpreter(ast: Any, period_ms: int, *, boolean: bool) -> Any:
-    """An RTAMT offline interpreter over `ast` that computes on arrays."""
-    visitor = _BooleanVisitor if boolean else _ArrayVisitor
-    made = discrete_time_offline_interpreter_factory(visitor)()
-    made.set_ast(ast)
-    made.set_sampling_period(period_ms, "ms", 0.1)
-    return made
+def _window_ahead(sample: Array, window: nodes.Window, reduce: Callable, pad: float) -> Array:
+    """out[i] = reduce(x[i+begin .. i+end]), the samples past the end as `pad`."""
+    padded = np.concatenate([sample, np.full(window.end + 1, pad)])
+    windows = sliding_window_view(padded[window.begin :], window.end - window.begin + 1)
+    return reduce(windows[: len(sample)], axis=1)
 
 
-def run(made: Any, node: Any, columns: dict[str, Any], length: int) -> Array:
-    """The series of `node` (and every node below it, kept in `ast.offline_results`)."""
-    made.ast.var_object_dict.update(columns)
-    made.ast.offline_results = {}
-    return made.visit(node, length)
+def _window_behind(sample: Array, window: nodes.Window, reduce: Callable, pad: float) -> Array:
+    """out[i] = reduce(x[i-end .. i-begin]), the samples before the start as `pad`."""
+    padded = np.concatenate([np.full(window.end, pad), sample])
+    windows = sliding_window_view(padded, window.end - window.begin + 1)
+    return reduce(windows[: len(sample)], axis=1)
+
+
+def _behind(sample: Array, ticks: int, fill: float) -> Array:
+    return np.concatenate([[fill] * ticks, sample[:-ticks]]) if len(sample) else sample
+
+
+def _ahead(sample: Array, ticks: int, fill: float) -> Array:
+    return np.concatenate([sample[ticks:], [fill] * ticks]) if len(sample) else sample
