@@ -372,6 +372,8 @@ class FakeAutopilot:
     def __init__(self, port: int, answer: Callable[[Any], int | None]) -> None:
         self.link = Link(parse_endpoint(f"udpout:127.0.0.1:{port}"), system=1, component=1)
         self.answer = answer
+        #: A STATUSTEXT sent just after a FAILED acknowledgement (None: none).
+        self.reason_after_ack: str | None = None
         self.beating = True
         self.received: list[Any] = []
         self._stop = threading.Event()
@@ -408,6 +410,14 @@ class FakeAutopilot:
                                 item.msg.command, result, 0, 0, 255, 190
                             )
                         )
+                    if result == mavlink.MAV_RESULT_FAILED and self.reason_after_ack:
+                        # As ArduCopter does: the STATUSTEXT is queued, the ACK is not.
+                        time.sleep(0.02)
+                        self.link.send(
+                            mavlink.MAVLink_statustext_message(
+                                mavlink.MAV_SEVERITY_CRITICAL, self.reason_after_ack.encode()
+                            )
+                        )
 
     def commands(self, command: int) -> list[Any]:
         return [
@@ -432,6 +442,27 @@ def _vehicle(port: int, **overrides: Any) -> MavlinkVehicle:
         **overrides,
     )
     return MavlinkVehicle(config)
+
+
+def test_a_refused_arming_waits_for_the_reason_the_autopilot_sends_after_its_ack(
+    vehicle_port: int,
+) -> None:
+    def refuse_arming(msg: Any) -> int:
+        if msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
+            return mavlink.MAV_RESULT_FAILED
+        return mavlink.MAV_RESULT_ACCEPTED
+
+    vehicle = _vehicle(vehicle_port)
+    with FakeAutopilot(vehicle_port, answer=refuse_arming) as autopilot:
+        autopilot.reason_after_ack = "Arm: Battery 1 below minimum arming voltage"
+        vehicle.connect()
+        with pytest.raises(VehicleCommandError) as refused:
+            vehicle._command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+    vehicle.close()
+    assert str(refused.value) == (
+        "MAV_CMD_COMPONENT_ARM_DISARM refused: FAILED "
+        "(autopilot: Arm: Battery 1 below minimum arming voltage)"
+    )
 
 
 def test_an_unanswered_command_is_retried_then_reported(vehicle_port: int) -> None:

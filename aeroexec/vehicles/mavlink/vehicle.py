@@ -81,6 +81,8 @@ STILL_SPEED = 0.3
 #: How long a `--failsafe hold` may take to be seen still: braking in GUIDED from a
 #: copter's cruise speed takes ArduCopter several seconds (docs/mavlink.md).
 HOLD_BOUND_S = 15.0
+#: How long a refused command waits for the autopilot's STATUSTEXT saying why (s).
+REFUSAL_TEXT_WAIT_S = 0.5
 #: STATUSTEXTs kept (the older half is dropped when full).
 MAX_TEXTS = 200
 
@@ -599,6 +601,12 @@ class MavlinkVehicle:
                     self._acks.clear()
                     if ack.result == mavlink.MAV_RESULT_ACCEPTED:
                         return ack
+                    if (
+                        command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM
+                        and ack.result == mavlink.MAV_RESULT_FAILED
+                        and len(self.texts) == texts_before
+                    ):
+                        self._await_text(texts_before)
                     said = "; ".join(t for _, _, t in self.texts[texts_before:])
                     because = f" (autopilot: {said})" if said else ""
                     raise VehicleCommandError(f"{name} refused: {result_name(ack.result)}{because}")
@@ -617,6 +625,19 @@ class MavlinkVehicle:
             f"{name}: no COMMAND_ACK after {attempts} attempt{'s' if attempts > 1 else ''} "
             f"({self.config.ack_timeout:g} s each)"
         )
+
+    def _await_text(self, count: int) -> None:
+        """Wait, briefly, for the autopilot to say why it refused to arm: ArduCopter
+        states every failed arming check in a STATUSTEXT ("Arm: Battery 1 below minimum
+        arming voltage"), which it queues, while the COMMAND_ACK goes out at once: the
+        reason may come just after the refusal."""
+        deadline = self._clock() + REFUSAL_TEXT_WAIT_S
+        while len(self.texts) == count and not self.link_lost:
+            remaining = deadline - self._clock()
+            if remaining <= 0:
+                return
+            self._process(self.link.poll(min(remaining, 0.05)))
+            self._service()
 
     def _set_mode(self, mode: int) -> None:
         self._command(
