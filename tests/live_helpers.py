@@ -3,6 +3,7 @@ thread, and `python -m aeroexec ...` in a subprocess whose output lines can be w
 
 from __future__ import annotations
 
+import os
 import queue
 import signal
 import socket
@@ -115,3 +116,18 @@ class AeroexecProcess:
         for stream in (self.popen.stdout, self.popen.stderr):
             if stream is not None:
                 stream.close()
+
+
+@contextmanager
+def cpu_loaded() -> Iterator[None]:
+    """Every core busy with a spinning process: what must hold under load is tried so."""
+    spinners = [
+        subprocess.Popen([sys.executable, "-c", "while True: pass"])
+        for _ in range(os.cpu_count() or 2)
+    ]
+    try:
+        yield
+    finally:
+        for spinner in spinners:
+            spinner.kill()
+            spinner.wait(5)

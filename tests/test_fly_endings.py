@@ -7,19 +7,17 @@ test_sitl_flights.py."""
 from __future__ import annotations
 
 import math
-import os
 import re
 import signal
 import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from live_helpers import free_tcp_port, free_udp_port, mavsim_thread, write_mission
+from live_helpers import cpu_loaded, free_tcp_port, free_udp_port, mavsim_thread, write_mission
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
@@ -338,21 +336,6 @@ def test_a_late_tick_is_not_made_up_for_with_a_burst() -> None:
 
 
 # -- confirmed endings --------------------------------------------------------------------------
-
-
-@contextmanager
-def cpu_loaded() -> Iterator[None]:
-    """Every core busy with a spinning process: the ending must hold all the same."""
-    spinners = [
-        subprocess.Popen([sys.executable, "-c", "while True: pass"])
-        for _ in range(os.cpu_count() or 2)
-    ]
-    try:
-        yield
-    finally:
-        for spinner in spinners:
-            spinner.kill()
-            spinner.wait(5)
 
 
 HOLD_AT = re.compile(

@@ -10,6 +10,7 @@ import re
 from pathlib import Path
 
 import pytest
+from test_properties import PATROL
 
 from aeroexec.mission.session import SessionConfig, simulate
 from aeroexec.properties.check import HELD, VIOLATED, check_recording
@@ -20,18 +21,6 @@ from aeroexec.vehicles.world import DEFAULT_WORLD
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "properties.md"
 APPENDIX_C = ROOT / "missions" / "appendix_c.py"
-PATROL = """\
-import executive_engine_api as api
-
-
-def runMission():
-    api.executeBehavior("TAKE_OFF")
-    for lap in range(3):
-        for point in ([3, 0, 1.5], [3, 3, 1.5], [0, 3, 1.5], [0, 0, 1.5]):
-            api.executeBehavior("GO_TO_POINT", coordinates=point)
-        api.executeBehavior("KEEP_HOVERING", duration=40)
-    api.executeBehavior("LAND")
-"""
 
 
 def _section(title: str) -> str:

@@ -23,7 +23,6 @@ import select
 import signal
 import socket
 import subprocess
-import sys
 import threading
 import time
 import tty
@@ -33,7 +32,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from live_helpers import AeroexecProcess, free_tcp_port, free_udp_port, write_mission
+from live_helpers import AeroexecProcess, cpu_loaded, free_tcp_port, free_udp_port, write_mission
 
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.properties.check import check_recording
@@ -637,21 +636,6 @@ def test_a_gcs_failsafe_that_is_off_is_refused_before_arming(tmp_path: Path, fli
 
 
 # -- confirmed endings -------------------------------------------------------------------------
-
-
-@contextmanager
-def cpu_loaded() -> Iterator[None]:
-    """Every core busy with a spinning process."""
-    spinners = [
-        subprocess.Popen([sys.executable, "-c", "while True: pass"])
-        for _ in range(os.cpu_count() or 2)
-    ]
-    try:
-        yield
-    finally:
-        for spinner in spinners:
-            spinner.kill()
-            spinner.wait(5)
 
 
 HOLD_AT = re.compile(
