@@ -182,17 +182,35 @@ def test_appendix_c_flies_on_mavsim_and_the_recording_holds_every_packet(
 # -- link loss --------------------------------------------------------------------------------
 
 
+def fly_through_a_link_loss(
+    tmp_path: Path, procs: list[Proc], body: str, *, failsafe: str
+) -> tuple[Any, MemoryObserver, dict[str, Any]]:
+    """Fly `body` against mavsim, whose heartbeats stop 1.2 s after the take-off for 2 s.
+    The take-off takes ~0.7 s of wall time, then GO_TO_POINT 40 m north ~4 s more; fly
+    calls the link lost after 1 s without a heartbeat, so in the middle of GO_TO_POINT.
+    The flight's result, what its bus carried, and mavsim's counts."""
+    port = free_udp_port()
+    stats_path = tmp_path / "mavsim.json"
+    mavsim = start_mavsim(procs, port, stats_path, "--drop-heartbeats-at", "1.2", "--drop-for", "2")
+    memory = MemoryObserver()
+    result = fly(
+        FlightConfig(
+            mission=write_mission(tmp_path, body),
+            connect=f"udpin:127.0.0.1:{port}",
+            heartbeat_timeout=1.0,
+            failsafe=failsafe,
+        ),
+        observers=[memory],
+    )
+    return result, memory, stop_mavsim(mavsim, stats_path)
+
+
 def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
     tmp_path: Path, procs: list[Proc]
 ) -> None:
-    port = free_udp_port()
-    stats_path = tmp_path / "mavsim.json"
-    # The take-off takes ~0.7 s of wall time, then GO_TO_POINT 40 m north ~4 s more;
-    # heartbeats stop 1.2 s after the take-off, for 2 s; fly calls the link lost after
-    # 1 s without one, so in the middle of GO_TO_POINT.
-    mavsim = start_mavsim(procs, port, stats_path, "--drop-heartbeats-at", "1.2", "--drop-for", "2")
-    mission = write_mission(
+    result, memory, stats = fly_through_a_link_loss(
         tmp_path,
+        procs,
         "    took_off = api.executeBehavior('TAKE_OFF')\n"
         "    went = api.executeBehavior('GO_TO_POINT', coordinates=[0, 40, 1])\n"
         "    turned = api.executeBehavior('ROTATE', angle=90)\n"
@@ -201,18 +219,8 @@ def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
         "            break\n"
         "        api.executeBehavior('WAIT', duration=1)\n"
         "    return took_off, went, turned, api.trueBelief('flying(self)')\n",
+        failsafe="land",
     )
-    memory = MemoryObserver()
-    result = fly(
-        FlightConfig(
-            mission=mission,
-            connect=f"udpin:127.0.0.1:{port}",
-            heartbeat_timeout=1.0,
-            failsafe="land",
-        ),
-        observers=[memory],
-    )
-    stats = stop_mavsim(mavsim, stats_path)
 
     assert result.outcome.returned
     assert result.outcome.value == ("GOAL_ACHIEVED", "PROCESS_FAILURE", "PROCESS_FAILURE", False)
@@ -251,27 +259,15 @@ def test_a_failsafe_hold_is_reported_only_once_the_autopilot_shows_it_still(
 ) -> None:
     """`--failsafe hold` brakes with a zero-velocity setpoint: sent is not stopped, so
     `failsafe_seen` waits for the autopilot's own velocity below `STILL_SPEED`."""
-    port = free_udp_port()
-    stats_path = tmp_path / "mavsim.json"
-    mavsim = start_mavsim(procs, port, stats_path, "--drop-heartbeats-at", "1.2", "--drop-for", "2")
-    mission = write_mission(
+    result, memory, _ = fly_through_a_link_loss(
         tmp_path,
+        procs,
         "    took_off = api.executeBehavior('TAKE_OFF')\n"
         "    went = api.executeBehavior('GO_TO_POINT', coordinates=[0, 40, 1])\n"
         "    api.executeBehavior('WAIT', duration=2)\n"
         "    return took_off, went\n",
+        failsafe="hold",
     )
-    memory = MemoryObserver()
-    result = fly(
-        FlightConfig(
-            mission=mission,
-            connect=f"udpin:127.0.0.1:{port}",
-            heartbeat_timeout=1.0,
-            failsafe="hold",
-        ),
-        observers=[memory],
-    )
-    stop_mavsim(mavsim, stats_path)
 
     assert result.outcome.value == ("GOAL_ACHIEVED", "PROCESS_FAILURE")
     link = memory.topics("mavlink/link")
