@@ -185,6 +185,7 @@ class ProcessExecutor:
             # Interrupted (a signal): replays in progress are abandoned, not awaited (one
             # may be stuck reading a slow store); the workers are ours to stop.
             workers = list((getattr(pool, "_processes", None) or {}).values())
+            manager = getattr(pool, "_executor_manager_thread", None)
             pool.shutdown(wait=False, cancel_futures=True)
             for worker in workers:  # (Python 3.14 has pool.terminate_workers() for this)
                 worker.terminate()
@@ -192,6 +193,11 @@ class ProcessExecutor:
                 worker.join(5)
                 if worker.is_alive():
                     worker.kill()
+            # The pool's manager thread closes its wake-up pipe when it sees the workers
+            # gone; the interpreter's exit hook writes to that pipe unlocked, so exiting
+            # while the thread is still closing it prints an EBADF traceback (3.11-3.13).
+            if manager is not None:
+                manager.join(5)
             return
         pool.shutdown(wait=True, cancel_futures=True)
 
