@@ -7,6 +7,7 @@ test_view_cli.py.)"""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import as2_support
@@ -148,3 +149,27 @@ def test_info_lists_the_imported_behavior_timeline(flights: dict) -> None:
     assert bag["profile"] == "ros2" and bag["complete"] is True
     assert bag["metadata"]["ros2_bag"]["format"] == "rosbag2 sqlite3"
     assert bag["channels"]["/drone0/TakeoffBehavior/_behavior/behavior_status"] == 270
+
+
+def test_replay_of_a_folder_finds_its_ros2_bags(flights: dict, tmp_path: Path) -> None:
+    """A folder of flights: a rosbag2 directory and a bare .db3 are recordings of it (the
+    directory is one bag, not a folder to look into); a plain subdirectory and other
+    files are not. A glob matches a rosbag2 directory too."""
+    folder = tmp_path / "flights"
+    folder.mkdir()
+    shutil.copytree(flights["mcap_bag"], folder / "a_flight")
+    (db3,) = flights["sqlite3_bag"].glob("*.db3")
+    shutil.copy(db3, folder / "b_flight.db3")
+    (folder / "c_notes").mkdir()
+    (folder / "c_notes" / "x.mcap").write_bytes(b"not looked into")
+    (folder / "d_readme.txt").write_text("not a recording")
+    for argument in (folder, folder / "*_flight*"):
+        code, out, err = _invoke(
+            "replay", argument, "--catalog", CATALOG, "-b", BEHAVIORS, "-f", "json"
+        )
+        assert code == 0, err
+        recordings = json.loads(out)["recordings"]
+        assert [(r["recording"], r["compared_commands"]) for r in recordings] == [
+            (str(folder / "a_flight"), 6),
+            (str(folder / "b_flight.db3"), 6),
+        ]
