@@ -104,11 +104,21 @@ def test_recorded_action_services_are_calls(flights: dict) -> None:
 def test_vehicle_state_from_platform_info_and_pose(variant: str, flights: dict) -> None:
     _, target, _ = flights[variant]
     states = _messages(target, "vehicle/state")
-    by_time = {round(t, 1): s for t, s in states}
-    assert by_time[1.5]["flying"] is False  # LANDED
-    assert by_time[10.0]["flying"] is True  # FLYING
-    assert by_time[24.0]["flying"] is True  # LANDING
-    assert by_time[26.5]["flying"] is False  # DISARMED
+
+    def at(time_s: float) -> dict:
+        return [s for t, s in states if t <= time_s][-1]
+
+    # flying from the platform's state, armed from its own flag (landed but armed before
+    # the takeoff and after the landing)
+    assert (at(1.5)["flying"], at(1.5)["armed"]) == (False, True)  # LANDED
+    assert (at(10.0)["flying"], at(10.0)["armed"]) == (True, True)  # FLYING
+    assert at(24.0)["flying"] is True  # LANDING
+    assert (at(25.5)["flying"], at(25.5)["armed"]) == (False, True)  # LANDED
+    assert (at(26.5)["flying"], at(26.5)["armed"]) == (False, False)  # DISARMED
+    # The first pose (0 s) comes before the first platform info (5 ms): no state is a
+    # guess, the first one waits for it.
+    assert all("flying" not in s.get("defaulted", ()) for _, s in states)
+    assert states[0][0] == pytest.approx(1 / 30, abs=1e-3)
     last_t, last = states[-1]
     assert last_t == pytest.approx(END_S, abs=0.04)
     assert last["position"] == pytest.approx([3.0, 3.0, 0.0], abs=1e-6)

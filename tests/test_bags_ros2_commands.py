@@ -173,3 +173,54 @@ def test_replay_of_a_folder_finds_its_ros2_bags(flights: dict, tmp_path: Path) -
             (str(folder / "a_flight"), 6),
             (str(folder / "b_flight.db3"), 6),
         ]
+
+
+def test_check_reads_the_signals_an_aerostack2_import_carries(
+    flights: dict, tmp_path: Path
+) -> None:
+    """`check` on an imported Aerostack2 flight: the vehicle (position, flying and armed
+    from platform/info) and the behavior timeline are signals; what the import does not
+    carry is `missing` with its reason, never guessed: the battery (no battery topic in
+    the bag, so the import's default) and the capabilities (Aerostack2 has none)."""
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(
+        "properties:\n"
+        "  - name: ceiling\n"
+        "    formula: always(altitude <= 1.4)\n"
+        "  - name: lands_after_takeoff\n"
+        "    formula: always((active_TakeoffBehavior >= 1) implies "
+        "eventually[0:30](active_LandBehavior >= 1))\n"
+        "  - name: battery_floor\n"
+        "    formula: always(battery >= 0.15)\n"
+    )
+    code, out, err = _invoke(
+        "check", flights["sqlite3"], "--spec", "aeroexec:safety", "--spec", spec, "-f", "json"
+    )
+    assert code == 1, err  # the ceiling is broken
+    (recording,) = json.loads(out)["recordings"]
+    verdicts = {v["property"]: v for v in recording["verdicts"]}
+    assert {name: v["status"] for name, v in verdicts.items()} == {
+        "compatible_capabilities": "missing",
+        "activations_answered": "held",  # every reconstructed activation has its event
+        "ends_landed_disarmed": "held",  # platform/info: LANDED, then DISARMED
+        "grounded_lands": "held",
+        "ceiling": "violated",
+        "lands_after_takeoff": "held",
+        "battery_floor": "missing",
+    }
+    # 1.4 m is passed at 5.73 s on the way up (1.5 m at 6 s) and at 22.2 s on the way down
+    interval = verdicts["ceiling"]["interval"]
+    assert interval["start_s"] == pytest.approx(5.73, abs=0.15)
+    assert interval["end_s"] == pytest.approx(22.2, abs=0.15)
+    assert verdicts["battery_floor"]["missing"] == [
+        {
+            "signal": "battery",
+            "why": "the recording's vehicle states lack battery (an import's default)",
+        }
+    ]
+    assert verdicts["compatible_capabilities"]["missing"] == [
+        {
+            "signal": "incompatible",
+            "why": "the recording has no list_of_active_capabilities messages",
+        }
+    ]

@@ -259,6 +259,19 @@ class _Import:
         self.selected = mapping.select(((c.topic, c.type) for c in bag.connections), drone)
         self.handlers: dict[int, list[_Entry]] = {}
         self._resolve(self.selected)
+        #: The vehicle topics (velocity, battery, flight status) the bag has messages on
+        #: that have not spoken yet: poses give no state until they have (or for at most
+        #: grace), so that a flight's first state is not a default where the bag has the
+        #: value a moment later (a signal with a default anywhere is missing for `check`).
+        counts = {c.id: c.count for c in bag.connections}
+        self._awaited = {
+            entry[0]
+            for cid, entries in self.handlers.items()
+            for entry in entries
+            if entry[0] in _LATEST_ONLY and counts.get(cid, 0) > 0
+        }
+        self._first_pose_ns: int | None = None
+        self._await_ns = mapping.grace_ns
         #: Behavior topics mapped: reconstruction may insert messages, so order matters.
         self.reconstructing = any(kind in _BEHAVIOR_KINDS for kind in self._kinds())
 
@@ -393,6 +406,13 @@ class _Import:
                 return
             self._last_status[connection.id] = data
         elif kind is Kind.POSE:
+            if self._awaited:
+                if self._first_pose_ns is None:
+                    self._first_pose_ns = time_ns
+                if time_ns - self._first_pose_ns < self._await_ns:
+                    self._skipped = (entry, connection, time_ns, data)
+                    return
+                self._awaited.clear()
             last = self._last_state_ns
             if last is not None and time_ns - last < self.period:
                 self._skipped = (entry, connection, time_ns, data)
@@ -401,6 +421,7 @@ class _Import:
             self._flush_latest()
         elif kind in _LATEST_ONLY:
             self._latest[kind] = (entry, connection, time_ns, data)
+            self._awaited.discard(kind)
             return
         self._decode(entry, connection, time_ns, data)
 
@@ -445,6 +466,9 @@ class _Import:
             if flying is None:
                 return False
             self.vehicle.flying(flying)
+            armed = extract.armed(message)
+            if armed is not None:
+                self.vehicle.armed(armed)
         elif kind is Kind.BEHAVIOR_EVENT:
             event = extract.event(message)
             if event is None:
