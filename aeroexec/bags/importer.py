@@ -184,49 +184,47 @@ class _Ordered:
     def __init__(self, sink: ImportSink) -> None:
         self._sink = sink
         #: (time, rank, arrival, topic, payload, call)
-        self._heap: list[tuple[int, int, int, str, Any, bool]] = []
+        self.heap: list[tuple[int, int, int, str, Any, bool]] = []
         #: (time, arrival, connection, raw bytes), in time order
-        self._raw: deque[tuple[int, int, BagConnection, bytes]] = deque()
+        self.queue: deque[tuple[int, int, BagConnection, bytes]] = deque()
         self._order = 0
 
     def raw(self, time_ns: int, connection: BagConnection, data: bytes) -> None:
         self._order += 1
-        self._raw.append((time_ns, self._order, connection, data))
+        self.queue.append((time_ns, self._order, connection, data))
 
     def derived(
         self, time_ns: int, rank: int, topic: str, data: dict[str, Any], call: bool = False
     ) -> None:
         self._order += 1
-        heapq.heappush(self._heap, (time_ns, rank, self._order, topic, data, call))
+        heapq.heappush(self.heap, (time_ns, rank, self._order, topic, data, call))
 
     @property
     def held(self) -> bool:
-        return bool(self._heap or self._raw)
+        return bool(self.heap or self.queue)
 
     def release(self, limit: int | None) -> None:
         """Write every message before `limit` (everything when None)."""
-        heap, raw, sink = self._heap, self._raw, self._sink
+        heap, queue = self.heap, self.queue
+        write_raw, write_derived = self._sink.raw, self._sink.derived_message
         end = float("inf") if limit is None else limit
         other = self.OTHER
-        while heap or raw:
-            if not heap:  # raw messages only: already in order
-                write = sink.raw
-                while raw and raw[0][0] < end:
-                    time_ns, _, connection, data = raw.popleft()
-                    write(connection, time_ns, data)
+        while queue or heap:
+            stop = heap[0][0] if heap and heap[0][0] < end else end
+            # the raw messages before the next derived one are in order already
+            while queue and queue[0][0] < stop:
+                time_ns, _, connection, data = queue.popleft()
+                write_raw(connection, time_ns, data)
+            if not heap or heap[0][0] >= end:
                 return
             top = heap[0]
-            if raw and (raw[0][0], other, raw[0][1]) < top[:3]:
-                time_ns = raw[0][0]
-                if time_ns >= end:
-                    return
-                _, _, connection, data = raw.popleft()
-                sink.raw(connection, time_ns, data)
-            else:
-                if top[0] >= end:
-                    return
-                time_ns, _, _, topic, data, call = heapq.heappop(heap)
-                sink.derived_message(topic, time_ns, data, call)
+            # the same instant: reconstructed first, then in arrival order
+            if queue and queue[0][0] == top[0] and (other, queue[0][1]) < top[1:3]:
+                time_ns, _, connection, data = queue.popleft()
+                write_raw(connection, time_ns, data)
+                continue
+            time_ns, _, _, topic, payload, call = heapq.heappop(heap)
+            write_derived(topic, time_ns, payload, call)
 
 
 class _Import:
@@ -328,6 +326,8 @@ class _Import:
         decide_after = 2 * recon.grace  # an input is decided once this much later is read
         direct = True  # nothing held: a message may be written as it comes
         poses = Kind.POSE in self._kinds()  # a vehicle to draw
+        write, hold = sink.raw, out.raw
+        heap, queue = out.heap, out.queue
         count = 0
         for connection, time_ns, data in self.bag.messages():
             count += 1
@@ -342,14 +342,14 @@ class _Import:
                     recon.advance(time_ns)
                     self._take_reconstruction()
                     horizon = recon.horizon
-                if out.held:
+                if heap or queue:
                     out.release(time_ns if horizon is None else min(time_ns, horizon))
                 # Raw messages need no rank: with nothing older held, write at once.
                 direct = horizon is None
             if direct:
-                sink.raw(connection, time_ns, data)
+                write(connection, time_ns, data)
             else:
-                self.out.raw(time_ns, connection, data)
+                hold(time_ns, connection, data)
             entries = handlers.get(connection.id)
             if entries is not None:
                 for entry in entries:
