@@ -7,6 +7,10 @@ platform and self-localization; every message byte for byte on its raw channel."
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -182,3 +186,40 @@ def test_without_behavior_status_activations_are_placed_at_their_ends(
     ]
     starts = _messages(target, "activate_behavior")
     assert [round(t, 3) for t, _ in starts] == [round(t, 3) for t, _ in ends]
+
+
+TOOL = Path(
+    os.environ.get(
+        "AEROEXEC_FOXGLOVE_CHECK",
+        Path(__file__).resolve().parents[2] / "shared/tools/foxglove-schema-check",
+    )
+)
+
+
+def _missing_tool() -> str | None:
+    if shutil.which("node") is None:
+        return "node is not installed (Debian package nodejs): cannot run the viewers' parsers"
+    if not TOOL.is_file():
+        return f"{TOOL} not found (set AEROEXEC_FOXGLOVE_CHECK to foxglove-schema-check)"
+    return None
+
+
+@pytest.mark.skipif(_missing_tool() is not None, reason=_missing_tool() or "")
+@pytest.mark.parametrize("variant", ["mcap", "sqlite3"])
+def test_the_import_channels_pass_the_viewers_schema_parsers(variant: str, flights: dict) -> None:
+    """Every channel the Aerostack2 mapping derives (behavior events and list, commands,
+    calls and call log, vehicle state and transform, scene) parses in Lichtblick's and
+    Foxglove Studio's own schema code."""
+    _, target, _ = flights[variant]
+    result = subprocess.run(
+        [str(TOOL), str(target), sys.executable], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    with open(target, "rb") as stream:
+        summary = make_reader(stream).get_summary()
+    json_schemas = {s.name for s in summary.schemas.values() if s.encoding == "jsonschema"}
+    assert {"aeroexec.BehaviorEvent", "aeroexec.VehicleState", "aeroexec.ServiceCall"} <= (
+        json_schemas
+    )
+    checked = {line.split(" ", 1)[0] for line in result.stdout.splitlines() if line.strip()}
+    assert json_schemas <= checked
