@@ -342,8 +342,10 @@ class _Import:
                     recon.advance(time_ns)
                     self._take_reconstruction()
                     horizon = recon.horizon
-                if heap or queue:
-                    out.release(time_ns if horizon is None else min(time_ns, horizon))
+                limit = time_ns if horizon is None or time_ns < horizon else horizon
+                # (most messages arrive with nothing held before the limit: no call)
+                if (queue and queue[0][0] < limit) or (heap and heap[0][0] < limit):
+                    out.release(limit)
                 # Raw messages need no rank: with nothing older held, write at once.
                 direct = horizon is None
             if direct:
