@@ -199,10 +199,6 @@ class _Ordered:
         self._order += 1
         heapq.heappush(self.heap, (time_ns, rank, self._order, topic, data, call))
 
-    @property
-    def held(self) -> bool:
-        return bool(self.heap or self.queue)
-
     def release(self, limit: int | None) -> None:
         """Write every message before `limit` (everything when None)."""
         heap, queue = self.heap, self.queue
@@ -400,8 +396,9 @@ class _Import:
 
     def _handle(self, entry: _Entry, connection: BagConnection, time_ns: int, data: bytes) -> None:
         """Decode what is used, when it is used: a pose only when it gives a state (or
-        is the last one), velocity/battery/status only the latest before such a pose, a
-        behavior status only when its bytes changed (it repeats every 100 ms)."""
+        is the last one; none before the mapped vehicle topics have spoken, for at most
+        grace), velocity/battery/status only the latest before such a pose, a behavior
+        status only when its bytes changed (it repeats every 100 ms)."""
         kind = entry[0]
         if kind is Kind.BEHAVIOR_STATUS:
             if self._last_status.get(connection.id) == data:
