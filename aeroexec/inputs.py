@@ -29,7 +29,7 @@ import fnmatch
 import glob
 import os
 import stat
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 from aeroexec.errors import AeroexecError, Mark
@@ -212,22 +212,34 @@ def has_magic(text: str) -> bool:
     return glob.has_magic(text)
 
 
-def directory_files(path: str | os.PathLike[str], suffixes: tuple[str, ...] = ()) -> Expansion:
+#: Tells a directory that is one input (a rosbag2 bag: a directory with its metadata.yaml)
+#: from a directory of inputs; such a directory is kept like a file.
+WholeDirectory = Callable[[str], bool]
+
+
+def directory_files(
+    path: str | os.PathLike[str],
+    suffixes: tuple[str, ...] = (),
+    whole: WholeDirectory | None = None,
+) -> Expansion:
     """The files directly inside the directory `path` whose name ends with one of
-    `suffixes` (any case; every file without them), sorted."""
+    `suffixes` (any case; every file without them), and the directories inside it that
+    `whole` says are one input each, sorted."""
     found = Expansion()
     for name in _names(str(path), found):
-        if not suffixes or name.lower().endswith(suffixes):
-            _keep(os.path.join(str(path), name), found)
+        inside = os.path.join(str(path), name)
+        if not suffixes or name.lower().endswith(suffixes) or (whole and whole(inside)):
+            _keep(inside, found, whole)
     found.files.sort()
     return found
 
 
-def glob_files(pattern: str) -> Expansion:
+def glob_files(pattern: str, whole: WholeDirectory | None = None) -> Expansion:
     """The files `pattern` matches, as `glob.glob(pattern, recursive=True)` finds them
     (hidden names only for a part that starts with '.'; `**` is any number of
-    directories), sorted; plus the directories that could not be listed and the matches
-    that are symlink loops or dangling symlinks."""
+    directories), and the directories it matches that `whole` says are one input each,
+    sorted; plus the directories that could not be listed and the matches that are
+    symlink loops or dangling symlinks."""
     found = Expansion()
     head, parts = _split(pattern)
     bases = [head]
@@ -253,7 +265,7 @@ def glob_files(pattern: str) -> Expansion:
             following = [p for p in following if _is_directory(p, found)]
         bases = list(dict.fromkeys(following))
     for path in sorted(bases):
-        _keep(path, found)
+        _keep(path, found, whole)
     found.files.sort()
     found.unreadable[:] = dict.fromkeys(found.unreadable)  # `**` lists a directory twice
     return found
@@ -326,9 +338,10 @@ def _tree(base: str, found: Expansion) -> Iterator[str]:
         pending.extend(reversed([p for p in below if _is_directory(p, found)]))
 
 
-def _keep(path: str, found: Expansion) -> None:
-    """Add the match `path` to the files unless it is a directory; one that does not
-    lead to a file (a symlink loop, a dangling symlink) is unreadable."""
+def _keep(path: str, found: Expansion, whole: WholeDirectory | None = None) -> None:
+    """Add the match `path` to the files unless it is a directory (other than one that
+    `whole` takes as one input); one that does not lead to a file (a symlink loop, a
+    dangling symlink) is unreadable."""
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
@@ -338,5 +351,5 @@ def _keep(path: str, found: Expansion) -> None:
     except OSError as exc:
         found.unreadable.append(Unreadable(path, _os_problem(exc)))
         return
-    if not stat.S_ISDIR(mode):
+    if not stat.S_ISDIR(mode) or (whole is not None and whole(path)):
         found.files.append(path)

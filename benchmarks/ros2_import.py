@@ -14,10 +14,15 @@ timeline, and reconstructs every activation.
 * time: `import_bag` against rosbags reading every message and deserializing it with the
   bag's own definitions, types built first (warm; the import keeps its type stores for
   the process too, and a warm-up import built them). Median CPU time of --repeat
-  interleaved runs (shared machine). The floor line beside it, as for ROS 1 bags
-  (bag_import.py): warm rosbags plus the `mcap` library alone writing the very records
-  the import wrote, already encoded: what any importer writing through mcap's Python
-  `Writer` pays.
+  interleaved runs (shared machine). The floor line beside it: what any importer built
+  on rosbags' reader and mcap's Python `Writer` pays at least, each part measured alone
+  and printed under it: rosbags reading every message's bytes (no deserializing), rosbags
+  deserializing the very messages the import decoded (the poses that give a vehicle
+  state, the platform info before each, the behavior and goal statuses that changed:
+  recorded during the warm-up import), and the `mcap` library alone writing the very
+  records the import wrote, already encoded, with the import's chunk size and
+  compression. The import's distance to the floor is its own work (deciding what to
+  decode, the timeline, reconstruction, ordering, JSON).
 * memory: the peak Python allocation (tracemalloc) of one import of a 2-minute and of a
   --minutes flight: their ratio should stay near 1 (the import streams: messages wait
   about a second of bag time for the reconstruction, never the whole bag).
@@ -131,6 +136,37 @@ def decoders(path: Path) -> dict[int, Decoder]:
         }
 
 
+def rosbags_read(path: Path) -> int:
+    """rosbags reading every message's bytes, deserializing none."""
+    count = 0
+    with Reader(path) as reader:
+        for _ in reader.messages():
+            count += 1
+    return count
+
+
+def decoded_by_import(path: Path, target: Path) -> list[tuple[Decoder, bytes]]:
+    """The messages one import decodes, with their decoders (in order)."""
+    seen: list[tuple[Decoder, bytes]] = []
+    decode = Decoder.decode
+
+    def recording(self: Decoder, data: bytes | memoryview) -> object:
+        seen.append((self, bytes(data)))
+        return decode(self, data)
+
+    Decoder.decode = recording  # type: ignore[method-assign]
+    try:
+        import_bag(path, target)
+    finally:
+        Decoder.decode = decode  # type: ignore[method-assign]
+    return seen
+
+
+def decode_alone(messages: list[tuple[Decoder, bytes]]) -> None:
+    for decoder, data in messages:
+        decoder.decode(data)
+
+
 def rosbags_warm(path: Path, found: dict[int, Decoder]) -> int:
     count = 0
     with Reader(path) as reader:
@@ -167,11 +203,14 @@ def main(argv: list[str] | None = None) -> int:
             report = import_bag(bag, target)  # warm-up: type stores kept for the process
             found = decoders(bag)
             records = written_records(target)
+            needed = decoded_by_import(bag, target)
             alone = work / f"{storage}-alone.mcap"
             medians = interleaved(
                 {
                     "import": timed(lambda bag=bag, target=target: import_bag(bag, target)),
                     "rosbags": timed(lambda bag=bag, found=found: rosbags_warm(bag, found)),
+                    "read": timed(lambda bag=bag: rosbags_read(bag)),
+                    "decode": timed(lambda needed=needed: decode_alone(needed)),
                     "mcap": timed(lambda alone=alone, records=records: mcap_alone(alone, records)),
                 },
                 args.repeat,
@@ -187,16 +226,17 @@ def main(argv: list[str] | None = None) -> int:
             )
             failed |= not figure.ok
             print(figure.line())
-            floor = f"  floor: rosbags + mcap alone writing the same {len(records):,} records"
-            print(
-                Figure(
-                    floor,
-                    medians["rosbags"] + medians["mcap"],
-                    medians["rosbags"],
-                    "rosbags",
-                    TARGET,
-                ).line()
-            )
+            rosbags = medians["rosbags"]
+            floor = medians["read"] + medians["decode"] + medians["mcap"]
+            floor_line = Figure("  floor: the three parts below", floor, rosbags, "rosbags", TARGET)
+            print(floor_line.line())
+            for name, part in (
+                ("rosbags reading the bytes, decoding none", "read"),
+                (f"rosbags decoding the {len(needed):,} messages the import decodes", "decode"),
+                (f"mcap alone writing the same {len(records):,} records", "mcap"),
+            ):
+                part_line = Figure(f"    {name}", medians[part], rosbags, "rosbags", TARGET)
+                print(part_line.line().rsplit(" | target", 1)[0])
             long_peak = peak_memory(bag, target)
             short_peak = peak_memory(short, work / f"short_{storage}.mcap")
             memory = Figure(

@@ -7,6 +7,10 @@ platform and self-localization; every message byte for byte on its raw channel."
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -104,11 +108,21 @@ def test_recorded_action_services_are_calls(flights: dict) -> None:
 def test_vehicle_state_from_platform_info_and_pose(variant: str, flights: dict) -> None:
     _, target, _ = flights[variant]
     states = _messages(target, "vehicle/state")
-    by_time = {round(t, 1): s for t, s in states}
-    assert by_time[1.5]["flying"] is False  # LANDED
-    assert by_time[10.0]["flying"] is True  # FLYING
-    assert by_time[24.0]["flying"] is True  # LANDING
-    assert by_time[26.5]["flying"] is False  # DISARMED
+
+    def at(time_s: float) -> dict:
+        return [s for t, s in states if t <= time_s][-1]
+
+    # flying from the platform's state, armed from its own flag (landed but armed before
+    # the takeoff and after the landing)
+    assert (at(1.5)["flying"], at(1.5)["armed"]) == (False, True)  # LANDED
+    assert (at(10.0)["flying"], at(10.0)["armed"]) == (True, True)  # FLYING
+    assert at(24.0)["flying"] is True  # LANDING
+    assert (at(25.5)["flying"], at(25.5)["armed"]) == (False, True)  # LANDED
+    assert (at(26.5)["flying"], at(26.5)["armed"]) == (False, False)  # DISARMED
+    # The first pose (0 s) comes before the first platform info (5 ms): no state is a
+    # guess, the first one waits for it.
+    assert all("flying" not in s.get("defaulted", ()) for _, s in states)
+    assert states[0][0] == pytest.approx(1 / 30, abs=1e-3)
     last_t, last = states[-1]
     assert last_t == pytest.approx(END_S, abs=0.04)
     assert last["position"] == pytest.approx([3.0, 3.0, 0.0], abs=1e-6)
@@ -172,3 +186,40 @@ def test_without_behavior_status_activations_are_placed_at_their_ends(
     ]
     starts = _messages(target, "activate_behavior")
     assert [round(t, 3) for t, _ in starts] == [round(t, 3) for t, _ in ends]
+
+
+TOOL = Path(
+    os.environ.get(
+        "AEROEXEC_FOXGLOVE_CHECK",
+        Path(__file__).resolve().parents[2] / "shared/tools/foxglove-schema-check",
+    )
+)
+
+
+def _missing_tool() -> str | None:
+    if shutil.which("node") is None:
+        return "node is not installed (Debian package nodejs): cannot run the viewers' parsers"
+    if not TOOL.is_file():
+        return f"{TOOL} not found (set AEROEXEC_FOXGLOVE_CHECK to foxglove-schema-check)"
+    return None
+
+
+@pytest.mark.skipif(_missing_tool() is not None, reason=_missing_tool() or "")
+@pytest.mark.parametrize("variant", ["mcap", "sqlite3"])
+def test_the_import_channels_pass_the_viewers_schema_parsers(variant: str, flights: dict) -> None:
+    """Every channel the Aerostack2 mapping derives (behavior events and list, commands,
+    calls and call log, vehicle state and transform, scene) parses in Lichtblick's and
+    Foxglove Studio's own schema code."""
+    _, target, _ = flights[variant]
+    result = subprocess.run(
+        [str(TOOL), str(target), sys.executable], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    with open(target, "rb") as stream:
+        summary = make_reader(stream).get_summary()
+    json_schemas = {s.name for s in summary.schemas.values() if s.encoding == "jsonschema"}
+    assert {"aeroexec.BehaviorEvent", "aeroexec.VehicleState", "aeroexec.ServiceCall"} <= (
+        json_schemas
+    )
+    checked = {line.split(" ", 1)[0] for line in result.stdout.splitlines() if line.strip()}
+    assert json_schemas <= checked

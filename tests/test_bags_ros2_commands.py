@@ -7,6 +7,7 @@ test_view_cli.py.)"""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import as2_support
@@ -148,3 +149,78 @@ def test_info_lists_the_imported_behavior_timeline(flights: dict) -> None:
     assert bag["profile"] == "ros2" and bag["complete"] is True
     assert bag["metadata"]["ros2_bag"]["format"] == "rosbag2 sqlite3"
     assert bag["channels"]["/drone0/TakeoffBehavior/_behavior/behavior_status"] == 270
+
+
+def test_replay_of_a_folder_finds_its_ros2_bags(flights: dict, tmp_path: Path) -> None:
+    """A folder of flights: a rosbag2 directory and a bare .db3 are recordings of it (the
+    directory is one bag, not a folder to look into); a plain subdirectory and other
+    files are not. A glob matches a rosbag2 directory too."""
+    folder = tmp_path / "flights"
+    folder.mkdir()
+    shutil.copytree(flights["mcap_bag"], folder / "a_flight")
+    (db3,) = flights["sqlite3_bag"].glob("*.db3")
+    shutil.copy(db3, folder / "b_flight.db3")
+    (folder / "c_notes").mkdir()
+    (folder / "c_notes" / "x.mcap").write_bytes(b"not looked into")
+    (folder / "d_readme.txt").write_text("not a recording")
+    for argument in (folder, folder / "*_flight*"):
+        code, out, err = _invoke(
+            "replay", argument, "--catalog", CATALOG, "-b", BEHAVIORS, "-f", "json"
+        )
+        assert code == 0, err
+        recordings = json.loads(out)["recordings"]
+        assert [(r["recording"], r["compared_commands"]) for r in recordings] == [
+            (str(folder / "a_flight"), 6),
+            (str(folder / "b_flight.db3"), 6),
+        ]
+
+
+def test_check_reads_the_signals_an_aerostack2_import_carries(
+    flights: dict, tmp_path: Path
+) -> None:
+    """`check` on an imported Aerostack2 flight: the vehicle (position, flying and armed
+    from platform/info) and the behavior timeline are signals; what the import does not
+    carry is `missing` with its reason, never guessed: the battery (no battery topic in
+    the bag, so the import's default) and the capabilities (Aerostack2 has none)."""
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(
+        "properties:\n"
+        "  - name: ceiling\n"
+        "    formula: always(altitude <= 1.4)\n"
+        "  - name: lands_after_takeoff\n"
+        "    formula: always((active_TakeoffBehavior >= 1) implies "
+        "eventually[0:30](active_LandBehavior >= 1))\n"
+        "  - name: battery_floor\n"
+        "    formula: always(battery >= 0.15)\n"
+    )
+    code, out, err = _invoke(
+        "check", flights["sqlite3"], "--spec", "aeroexec:safety", "--spec", spec, "-f", "json"
+    )
+    assert code == 1, err  # the ceiling is broken
+    (recording,) = json.loads(out)["recordings"]
+    verdicts = {v["property"]: v for v in recording["verdicts"]}
+    assert {name: v["status"] for name, v in verdicts.items()} == {
+        "compatible_capabilities": "missing",
+        "activations_answered": "held",  # every reconstructed activation has its event
+        "ends_landed_disarmed": "held",  # platform/info: LANDED, then DISARMED
+        "grounded_lands": "held",
+        "ceiling": "violated",
+        "lands_after_takeoff": "held",
+        "battery_floor": "missing",
+    }
+    # 1.4 m is passed at 5.73 s on the way up (1.5 m at 6 s) and at 22.2 s on the way down
+    interval = verdicts["ceiling"]["interval"]
+    assert interval["start_s"] == pytest.approx(5.73, abs=0.15)
+    assert interval["end_s"] == pytest.approx(22.2, abs=0.15)
+    assert verdicts["battery_floor"]["missing"] == [
+        {
+            "signal": "battery",
+            "why": "the recording's vehicle states lack battery (an import's default)",
+        }
+    ]
+    assert verdicts["compatible_capabilities"]["missing"] == [
+        {
+            "signal": "incompatible",
+            "why": "the recording has no list_of_active_capabilities messages",
+        }
+    ]

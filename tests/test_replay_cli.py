@@ -290,7 +290,8 @@ def test_empty_directory_and_unmatched_glob(work: Path) -> None:
     code, _, err = cli("replay", str(empty))
     assert code == 2
     assert one_error_line(err) == (
-        f"{empty}: error: no *.mcap recordings in this directory (nor ROS 1 *.bag)"
+        f"{empty}: error: no *.mcap recordings in this directory (nor ROS bags: *.bag, "
+        "*.db3, rosbag2 directories)"
     )
     code, _, err = cli("replay", str(work / "zz*.mcap"))
     assert code == 2

@@ -21,12 +21,15 @@ FLYING_ABOVE_M = 0.1
 class VehicleStateBuilder:
     """`vehicle/state` at each pose, with the latest velocity, battery and flight status
     seen before it. Fields the bag has not given (yet) are filled (velocity 0, battery
-    1.0, flying = higher than FLYING_ABOVE_M) and named in the message's `defaulted`."""
+    1.0, flying = higher than FLYING_ABOVE_M) and named in the message's `defaulted`;
+    `armed` is the flight status's own where it has one (Aerostack2's PlatformInfo),
+    else flying."""
 
     def __init__(self) -> None:
         self._velocity: tuple[float, float, float] | None = None
         self._battery: float | None = None
         self._flying: bool | None = None
+        self._armed: bool | None = None
 
     def velocity(self, value: tuple[float, float, float]) -> None:
         self._velocity = value
@@ -36,6 +39,9 @@ class VehicleStateBuilder:
 
     def flying(self, value: bool) -> None:
         self._flying = value
+
+    def armed(self, value: bool) -> None:
+        self._armed = value
 
     def state(self, pose: Pose) -> dict[str, Any]:
         missing = []
@@ -57,7 +63,7 @@ class VehicleStateBuilder:
             "yaw": pose.yaw,
             "battery": battery,
             "flying": flying,
-            "armed": flying,
+            "armed": flying if self._armed is None else self._armed,
             "fault": "",
         }
         if missing:

@@ -291,6 +291,13 @@ def flying(message: object) -> bool | None:
     return status in _FLYING_STATUSES
 
 
+def armed(message: object) -> bool | None:
+    """Armed? From a flight status with an `armed` flag (Aerostack2's PlatformInfo);
+    None when it has none."""
+    flag = getattr(message, "armed", None)
+    return flag if isinstance(flag, bool) else None
+
+
 def plain(value: object) -> Any:
     """A decoded message as JSON-ready values: messages as dicts (by field), arrays
     (numpy) as lists, numbers and strings as they are."""

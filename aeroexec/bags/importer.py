@@ -184,49 +184,43 @@ class _Ordered:
     def __init__(self, sink: ImportSink) -> None:
         self._sink = sink
         #: (time, rank, arrival, topic, payload, call)
-        self._heap: list[tuple[int, int, int, str, Any, bool]] = []
+        self.heap: list[tuple[int, int, int, str, Any, bool]] = []
         #: (time, arrival, connection, raw bytes), in time order
-        self._raw: deque[tuple[int, int, BagConnection, bytes]] = deque()
+        self.queue: deque[tuple[int, int, BagConnection, bytes]] = deque()
         self._order = 0
 
     def raw(self, time_ns: int, connection: BagConnection, data: bytes) -> None:
         self._order += 1
-        self._raw.append((time_ns, self._order, connection, data))
+        self.queue.append((time_ns, self._order, connection, data))
 
     def derived(
         self, time_ns: int, rank: int, topic: str, data: dict[str, Any], call: bool = False
     ) -> None:
         self._order += 1
-        heapq.heappush(self._heap, (time_ns, rank, self._order, topic, data, call))
-
-    @property
-    def held(self) -> bool:
-        return bool(self._heap or self._raw)
+        heapq.heappush(self.heap, (time_ns, rank, self._order, topic, data, call))
 
     def release(self, limit: int | None) -> None:
         """Write every message before `limit` (everything when None)."""
-        heap, raw, sink = self._heap, self._raw, self._sink
+        heap, queue = self.heap, self.queue
+        write_raw, write_derived = self._sink.raw, self._sink.derived_message
         end = float("inf") if limit is None else limit
         other = self.OTHER
-        while heap or raw:
-            if not heap:  # raw messages only: already in order
-                write = sink.raw
-                while raw and raw[0][0] < end:
-                    time_ns, _, connection, data = raw.popleft()
-                    write(connection, time_ns, data)
+        while queue or heap:
+            stop = heap[0][0] if heap and heap[0][0] < end else end
+            # the raw messages before the next derived one are in order already
+            while queue and queue[0][0] < stop:
+                time_ns, _, connection, data = queue.popleft()
+                write_raw(connection, time_ns, data)
+            if not heap or heap[0][0] >= end:
                 return
             top = heap[0]
-            if raw and (raw[0][0], other, raw[0][1]) < top[:3]:
-                time_ns = raw[0][0]
-                if time_ns >= end:
-                    return
-                _, _, connection, data = raw.popleft()
-                sink.raw(connection, time_ns, data)
-            else:
-                if top[0] >= end:
-                    return
-                time_ns, _, _, topic, data, call = heapq.heappop(heap)
-                sink.derived_message(topic, time_ns, data, call)
+            # the same instant: reconstructed first, then in arrival order
+            if queue and queue[0][0] == top[0] and (other, queue[0][1]) < top[1:3]:
+                time_ns, _, connection, data = queue.popleft()
+                write_raw(connection, time_ns, data)
+                continue
+            time_ns, _, _, topic, payload, call = heapq.heappop(heap)
+            write_derived(topic, time_ns, payload, call)
 
 
 class _Import:
@@ -259,6 +253,19 @@ class _Import:
         self.selected = mapping.select(((c.topic, c.type) for c in bag.connections), drone)
         self.handlers: dict[int, list[_Entry]] = {}
         self._resolve(self.selected)
+        #: The vehicle topics (velocity, battery, flight status) the bag has messages on
+        #: that have not spoken yet: poses give no state until they have (or for at most
+        #: grace), so that a flight's first state is not a default where the bag has the
+        #: value a moment later (a signal with a default anywhere is missing for `check`).
+        counts = {c.id: c.count for c in bag.connections}
+        self._awaited = {
+            entry[0]
+            for cid, entries in self.handlers.items()
+            for entry in entries
+            if entry[0] in _LATEST_ONLY and counts.get(cid, 0) > 0
+        }
+        self._first_pose_ns: int | None = None
+        self._await_ns = mapping.grace_ns
         #: Behavior topics mapped: reconstruction may insert messages, so order matters.
         self.reconstructing = any(kind in _BEHAVIOR_KINDS for kind in self._kinds())
 
@@ -315,6 +322,8 @@ class _Import:
         decide_after = 2 * recon.grace  # an input is decided once this much later is read
         direct = True  # nothing held: a message may be written as it comes
         poses = Kind.POSE in self._kinds()  # a vehicle to draw
+        write, hold = sink.raw, out.raw
+        heap, queue = out.heap, out.queue
         count = 0
         for connection, time_ns, data in self.bag.messages():
             count += 1
@@ -329,14 +338,16 @@ class _Import:
                     recon.advance(time_ns)
                     self._take_reconstruction()
                     horizon = recon.horizon
-                if out.held:
-                    out.release(time_ns if horizon is None else min(time_ns, horizon))
+                limit = time_ns if horizon is None or time_ns < horizon else horizon
+                # (most messages arrive with nothing held before the limit: no call)
+                if (queue and queue[0][0] < limit) or (heap and heap[0][0] < limit):
+                    out.release(limit)
                 # Raw messages need no rank: with nothing older held, write at once.
                 direct = horizon is None
             if direct:
-                sink.raw(connection, time_ns, data)
+                write(connection, time_ns, data)
             else:
-                self.out.raw(time_ns, connection, data)
+                hold(time_ns, connection, data)
             entries = handlers.get(connection.id)
             if entries is not None:
                 for entry in entries:
@@ -385,14 +396,22 @@ class _Import:
 
     def _handle(self, entry: _Entry, connection: BagConnection, time_ns: int, data: bytes) -> None:
         """Decode what is used, when it is used: a pose only when it gives a state (or
-        is the last one), velocity/battery/status only the latest before such a pose, a
-        behavior status only when its bytes changed (it repeats every 100 ms)."""
+        is the last one; none before the mapped vehicle topics have spoken, for at most
+        grace), velocity/battery/status only the latest before such a pose, a behavior
+        status only when its bytes changed (it repeats every 100 ms)."""
         kind = entry[0]
         if kind is Kind.BEHAVIOR_STATUS:
             if self._last_status.get(connection.id) == data:
                 return
             self._last_status[connection.id] = data
         elif kind is Kind.POSE:
+            if self._awaited:
+                if self._first_pose_ns is None:
+                    self._first_pose_ns = time_ns
+                if time_ns - self._first_pose_ns < self._await_ns:
+                    self._skipped = (entry, connection, time_ns, data)
+                    return
+                self._awaited.clear()
             last = self._last_state_ns
             if last is not None and time_ns - last < self.period:
                 self._skipped = (entry, connection, time_ns, data)
@@ -401,6 +420,7 @@ class _Import:
             self._flush_latest()
         elif kind in _LATEST_ONLY:
             self._latest[kind] = (entry, connection, time_ns, data)
+            self._awaited.discard(kind)
             return
         self._decode(entry, connection, time_ns, data)
 
@@ -445,6 +465,9 @@ class _Import:
             if flying is None:
                 return False
             self.vehicle.flying(flying)
+            armed = extract.armed(message)
+            if armed is not None:
+                self.vehicle.armed(armed)
         elif kind is Kind.BEHAVIOR_EVENT:
             event = extract.event(message)
             if event is None:

@@ -241,7 +241,8 @@ class Ros2Bag:
                 check_interrupts()
                 count += 1
                 last = time_ns
-                yield by_id[connection.id], time_ns, bytes(data)
+                # rosbags gives bytes (a copy only for another buffer type)
+                yield by_id[connection.id], time_ns, data if type(data) is bytes else bytes(data)
         except RecordingError:
             raise
         except Exception as exc:

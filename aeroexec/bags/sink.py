@@ -74,11 +74,12 @@ class ImportSink:
         self._schemas: dict[tuple[str, str, bytes], int] = {}
         self._raw: dict[int, int] = {}  # bag connection id -> channel id
         self._json: dict[str, int] = {}  # aeroexec topic -> channel id
+        self._add_message = self._writer.add_message
         self._sequence = 0
         self._call_seq = 0
         #: aeroexec topic -> messages written (derived channels only).
         self.derived: dict[str, int] = {}
-        self.raw_messages = 0
+        self._derived_total = 0
 
     def start(
         self, metadata: Mapping[str, Mapping[str, str]], attachments: Mapping[str, bytes]
@@ -139,10 +140,15 @@ class ImportSink:
 
     # -- messages ----------------------------------------------------------------------------
     def raw(self, connection: BagConnection, log_time_ns: int, data: bytes) -> None:
-        channel = self._raw.get(connection.id) or self.raw_channel(connection)
-        self._writer.add_message(channel, log_time_ns, data, log_time_ns, self._sequence)
+        """A bag message on its raw channel (registered first: `raw_channel`). The one
+        call per bag message: it does nothing but hand the bytes to mcap."""
+        self._add_message(self._raw[connection.id], log_time_ns, data, log_time_ns, self._sequence)
         self._sequence += 1
-        self.raw_messages += 1
+
+    @property
+    def raw_messages(self) -> int:
+        """Bag messages written (every message is numbered, raw and derived alike)."""
+        return self._sequence - self._derived_total
 
     def derived_message(
         self, topic: str, log_time_ns: int, data: dict[str, Any], call: bool = False
@@ -158,6 +164,7 @@ class ImportSink:
             channel = self._json_channel(topic, schema_name_for_topic(topic))
         self._add(channel, log_time_ns, encode_json(data))
         self.derived[topic] = self.derived.get(topic, 0) + 1
+        self._derived_total += 1
         if call:
             self.derived_message("call_log", log_time_ns, call_log_message(data, log_time_ns))
 

@@ -158,7 +158,8 @@ def replay(
         typer.Argument(
             metavar="REC...",
             help="Recordings (.mcap, ROS 1 .bag, ROS 2 bags: a rosbag2 directory, a .db3, "
-            "a ros2 .mcap), directories (every *.mcap and *.bag inside) or quoted globs.",
+            "a ros2 .mcap), directories (every *.mcap, *.bag, *.db3 and rosbag2 directory "
+            "inside) or quoted globs.",
             show_default=False,
         ),
     ],

@@ -1,7 +1,9 @@
-"""Which recordings a command line names: files, directories (every `*.mcap` and ROS 1
-`*.bag` inside, sorted; a rosbag2 directory, with its `metadata.yaml`, is one ROS 2
-bag) and glob patterns (sorted matches), in the order given; the same for URLs
-(`s3://bucket/flights/`, through fsspec: aeroexec.replay.remote)."""
+"""Which recordings a command line names: files, directories (every `*.mcap`, ROS 1
+`*.bag`, ROS 2 `*.db3` and rosbag2 directory inside, sorted) and glob patterns (sorted
+matches, rosbag2 directories included), in the order given; the same for URLs
+(`s3://bucket/flights/`, through fsspec: aeroexec.replay.remote, files only). A rosbag2
+directory (one with its `metadata.yaml`) is one ROS 2 bag, never a folder of
+recordings: its storage files are not inputs of their own."""
 
 from __future__ import annotations
 
@@ -11,11 +13,18 @@ from dataclasses import dataclass
 from aeroexec.inputs import directory_files, glob_files, has_magic, is_directory
 from aeroexec.replay.remote import expand_url, is_url
 
-#: What a directory contributes.
-SUFFIXES = (".mcap", ".bag")
+#: The files a directory contributes (a `.mcap` is an aeroexec recording or a ROS 2 bag).
+SUFFIXES = (".mcap", ".bag", ".db3")
 #: What makes a directory one rosbag2 bag rather than a folder of recordings.
 ROSBAG2_METADATA = "metadata.yaml"
-EMPTY_DIRECTORY = "no *.mcap recordings in this directory (nor ROS 1 *.bag)"
+EMPTY_DIRECTORY = (
+    "no *.mcap recordings in this directory (nor ROS bags: *.bag, *.db3, rosbag2 directories)"
+)
+
+
+def is_rosbag2_directory(path: str) -> bool:
+    """A directory with a `metadata.yaml`: one ROS 2 bag."""
+    return is_directory(path) and os.path.isfile(os.path.join(path, ROSBAG2_METADATA))
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,15 +47,15 @@ def expand_inputs(arguments: list[str]) -> list[Input]:
                 Input(url, error) for url, error in expand_url(argument, SUFFIXES, EMPTY_DIRECTORY)
             )
             continue
-        if is_directory(argument) and os.path.isfile(os.path.join(argument, ROSBAG2_METADATA)):
+        if is_rosbag2_directory(argument):
             out.append(Input(argument))  # a ROS 2 bag: one recording, imported first
             continue
         if is_directory(argument):
-            found = directory_files(argument, SUFFIXES)
+            found = directory_files(argument, SUFFIXES, is_rosbag2_directory)
             if not found.files and not found.unreadable:
                 out.append(Input(argument, EMPTY_DIRECTORY))
         elif not os.path.lexists(argument) and has_magic(argument):
-            found = glob_files(argument)
+            found = glob_files(argument, is_rosbag2_directory)
             if not found.files and not found.unreadable:
                 out.append(Input(argument, "no recordings match this pattern"))
         else:
