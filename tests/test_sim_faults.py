@@ -90,7 +90,8 @@ def test_a_wind_gust_pushes_the_vehicle_toward_its_direction_then_it_comes_back(
     pushed = max(s.position[1] - home[1] for s in states)
     assert pushed > 1.0  # north: 90 degrees counter-clockwise from east
     assert max(abs(s.position[0] - home[0]) for s in states) < 1e-9
-    assert states[3].speed == 0.0 and states[5].velocity[1] > 2.0  # its ground velocity has the wind in it
+    # Its ground velocity has the wind in it.
+    assert states[3].speed == 0.0 and states[5].velocity[1] > 2.0
     back = run(vehicle, 10.0)[-1]
     assert math.dist(back.position, home) < 0.01
 
