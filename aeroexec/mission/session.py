@@ -41,7 +41,7 @@ from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
-    from aeroexec.vehicles.world import World
+    from aeroexec.vehicles.world import ScheduledFailure, World
 
 
 #: A mission that never ends is stopped after one simulated day.
@@ -62,6 +62,10 @@ class SessionConfig:
     allow_unimplemented: bool = False
     #: The session ends when the simulated clock reaches this (None: never).
     max_sim_time_s: float | None = DEFAULT_MAX_SIM_TIME_S
+    #: Failures struck into the world besides its own (`replay --inject`), and the
+    #: metadata that records them.
+    injected: tuple[ScheduledFailure, ...] = ()
+    injected_metadata: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -92,10 +96,12 @@ def _world_text(world_path: str | Path | None) -> tuple[str, str]:
     return read_text(path, "a world file", WorldError), str(path)
 
 
-def _build_vehicle(world_text: str, world_file: str, seed: int) -> SimVehicle:
-    from aeroexec.vehicles.world import parse_world
+def _build_vehicle(
+    world_text: str, world_file: str, seed: int, injected: tuple[ScheduledFailure, ...] = ()
+) -> SimVehicle:
+    from aeroexec.vehicles.world import parse_world, with_failures
 
-    return SimVehicle(parse_world(world_text, world_file), seed=seed)
+    return SimVehicle(with_failures(parse_world(world_text, world_file), injected), seed=seed)
 
 
 def session_observers(
@@ -195,7 +201,7 @@ def simulate(
     script = script if script is not None else load_mission(config.mission)
     code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
     world_text, world_file = world if world is not None else _world_text(config.world)
-    vehicle = _build_vehicle(world_text, world_file, config.seed)
+    vehicle = _build_vehicle(world_text, world_file, config.seed, config.injected)
     metadata = {
         "aeroexec_version": __version__,
         "seed": str(config.seed),
@@ -206,6 +212,7 @@ def simulate(
         "mission": Path(script.path).name,
         "world": Path(str(config.world)).name if config.world else "default",
         **stand_in_metadata(code),
+        **config.injected_metadata,
     }
     attachments = {
         "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,

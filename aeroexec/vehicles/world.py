@@ -14,7 +14,7 @@ default (docs/whatif.md#fault-kinds).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -418,6 +418,15 @@ def _random_failure(r: _Reader, node: YNode) -> RandomFailure:
         r.integer(entry["seed"], "random_failure.seed", 0, 2**63 - 1) if "seed" in entry else None,
         **values,
     )
+
+
+def with_failures(world: World, failures: tuple[ScheduledFailure, ...]) -> World:
+    """`world` with `failures` struck besides its own (in time order; at the same time,
+    the world's first)."""
+    if not failures:
+        return world
+    merged = sorted((*world.failures, *failures), key=lambda f: f.at)
+    return replace(world, failures=tuple(merged))
 
 
 def load_world(path: str | Path) -> World:
