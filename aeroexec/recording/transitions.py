@@ -71,9 +71,26 @@ class Moment:
     offset_ns: int = 0
 
 
+@dataclass(frozen=True, slots=True)
+class Timeline:
+    """A recording's transitions, its length (session time of its last message) and the
+    vehicle state it started from (None: it has none)."""
+
+    transitions: tuple[RecordedTransition, ...]
+    end_ns: int
+    first_state: dict[str, object] | None = None
+
+
 def read_transitions(path: str | os.PathLike[str]) -> tuple[RecordedTransition, ...]:
     """Every transition of the recording, in the order they happened."""
+    return read_timeline(path).transitions
+
+
+def read_timeline(path: str | os.PathLike[str]) -> Timeline:
+    """One pass over the recording: its transitions, length and first vehicle state."""
     found: list[RecordedTransition] = []
+    first_state: dict[str, object] | None = None
+    last = 0
     counts: dict[tuple[str, str], int] = {}
     held: tuple[str, ...] = ()
     origin: int | None = None
@@ -86,6 +103,7 @@ def read_transitions(path: str | os.PathLike[str]) -> tuple[RecordedTransition, 
         if origin is None:
             origin = record.log_time_ns if record.log_time_ns >= ABSOLUTE_NS else 0
         t_ns = record.log_time_ns - origin
+        last = max(last, t_ns)
         if isinstance(record, RecordedCall):
             if (
                 record.service == "activate_behavior"
@@ -97,7 +115,9 @@ def read_transitions(path: str | os.PathLike[str]) -> tuple[RecordedTransition, 
             continue
         if not isinstance(record, RecordedTopic) or not isinstance(record.data, dict):
             continue
-        if record.name == "behavior_event":
+        if record.name == "vehicle/state" and first_state is None:
+            first_state = record.data
+        elif record.name == "behavior_event":
             behavior = record.data.get("name")
             if isinstance(behavior, str) and behavior:
                 add("end", behavior, t_ns, str(record.data.get("code", "")))
@@ -110,7 +130,7 @@ def read_transitions(path: str | os.PathLike[str]) -> tuple[RecordedTransition, 
                 if name not in held:
                     add("capability", "+" + name, t_ns)
             held = now
-    return tuple(found)
+    return Timeline(tuple(found), last, first_state)
 
 
 def _referenced(data: dict[str, object]) -> tuple[str, ...]:
