@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -66,6 +66,9 @@ class SessionConfig:
     #: metadata that records them.
     injected: tuple[ScheduledFailure, ...] = ()
     injected_metadata: Mapping[str, str] = field(default_factory=dict)
+    #: Where the vehicle starts instead of the world's: (x, y, yaw in degrees), on the
+    #: ground (a flight's simulated twin starts where the flight did).
+    start: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -96,12 +99,40 @@ def _world_text(world_path: str | Path | None) -> tuple[str, str]:
     return read_text(path, "a world file", WorldError), str(path)
 
 
-def _build_vehicle(
-    world_text: str, world_file: str, seed: int, injected: tuple[ScheduledFailure, ...] = ()
-) -> SimVehicle:
+#: The metadata key of a session that started elsewhere than its world's start.
+START = "start"
+
+
+def start_metadata(start: tuple[float, float, float] | None) -> dict[str, str]:
+    """`start=x,y,yaw` (exact floats), or nothing for the world's own start."""
+    return {START: ",".join(repr(float(v)) for v in start)} if start is not None else {}
+
+
+def recorded_start(metadata: Mapping[str, str]) -> tuple[float, float, float] | None:
+    """The start a session recorded (`start_metadata`), or None (also for a malformed
+    value: the world's start, as for a recording without one)."""
+    text = metadata.get(START)
+    if not text:
+        return None
+    try:
+        x, y, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        return None
+    return (x, y, yaw)
+
+
+def placed(world: World, start: tuple[float, float, float] | None) -> World:
+    """`world` with the vehicle starting at `start` (x, y, yaw degrees) on the ground."""
+    if start is None:
+        return world
+    return replace(world, start=(start[0], start[1], 0.0), start_yaw=start[2])
+
+
+def _build_vehicle(world_text: str, world_file: str, config: SessionConfig) -> SimVehicle:
     from aeroexec.vehicles.world import parse_world, with_failures
 
-    return SimVehicle(with_failures(parse_world(world_text, world_file), injected), seed=seed)
+    world = with_failures(parse_world(world_text, world_file), config.injected)
+    return SimVehicle(placed(world, config.start), seed=config.seed)
 
 
 def session_observers(
@@ -201,7 +232,7 @@ def simulate(
     script = script if script is not None else load_mission(config.mission)
     code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
     world_text, world_file = world if world is not None else _world_text(config.world)
-    vehicle = _build_vehicle(world_text, world_file, config.seed, config.injected)
+    vehicle = _build_vehicle(world_text, world_file, config)
     metadata = {
         "aeroexec_version": __version__,
         "seed": str(config.seed),
@@ -212,6 +243,7 @@ def simulate(
         "mission": Path(script.path).name,
         "world": Path(str(config.world)).name if config.world else "default",
         **stand_in_metadata(code),
+        **start_metadata(config.start),
         **config.injected_metadata,
     }
     attachments = {

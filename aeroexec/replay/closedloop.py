@@ -32,11 +32,14 @@ from aeroexec.mission.script import MissionScript, compile_mission
 from aeroexec.mission.session import (
     SessionConfig,
     end_recording,
+    placed,
+    recorded_start,
     recording_session,
     session_code,
     session_observers,
     simulate,
     stand_in_metadata,
+    start_metadata,
 )
 from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.recording.reader import attachment_place
@@ -63,6 +66,7 @@ class _Injected:
 
     faults: tuple[ScheduledFailure, ...]
     metadata: dict[str, str]
+    start: tuple[float, float, float] | None = None
 
 
 class _Discard(io.TextIOBase):
@@ -142,6 +146,7 @@ def replay_closed(
     watchers: Sequence[BusObserver] = (),
     faults: tuple[ScheduledFailure, ...] = (),
     faults_metadata: Mapping[str, str] | None = None,
+    start: tuple[float, float, float] | None = None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` in the simulator with `behaviors` (complete for the catalog, stand-ins
     included); the replay's outcome and notes about how.
@@ -150,7 +155,8 @@ def replay_closed(
     the script stored in the recording. Neither: the recorded command stream is replayed
     and no code from the recording runs. `watchers` observe the replay's bus too (its
     progress). `faults` strike besides the world's own (`--inject`), and
-    `faults_metadata` records them."""
+    `faults_metadata` records them. `start` (x, y, yaw degrees): where the vehicle
+    starts instead of the world's start (a flight's twin; a recording that says so)."""
     notes: list[str] = []
     metadata = run.metadata
     seed = _seed(metadata, notes)
@@ -159,7 +165,8 @@ def replay_closed(
     builder = OutcomeBuilder(horizon_ns)
     observer = OutcomeObserver(builder)
     script = script_to_run(run, mission, trust_recording, notes)
-    injected = _Injected(faults, dict(faults_metadata or {}))
+    start = start if start is not None else recorded_start(metadata)
+    injected = _Injected(faults, dict(faults_metadata or {}), start)
     if script is None:
         _replay_commands(
             run, catalog, behaviors, output, world, seed, drone, observer, watchers, injected
@@ -176,6 +183,7 @@ def replay_closed(
             behaviors=behaviors,
             injected=injected.faults,
             injected_metadata=injected.metadata,
+            start=start,
         )
         with mission_prints_discarded():
             result = simulate(
@@ -205,7 +213,8 @@ def _replay_commands(
     watchers: Sequence[BusObserver],
     injected: _Injected,
 ) -> None:
-    vehicle = SimVehicle(with_failures(parse_world(*world), injected.faults), seed=seed)
+    world_model = with_failures(parse_world(*world), injected.faults)
+    vehicle = SimVehicle(placed(world_model, injected.start), seed=seed)
     # The simulation starts when the recording does (a live log's clock need not be 0).
     offset = run.outcome.start_ns or 0
     observer.offset_ns = offset
@@ -220,6 +229,7 @@ def _replay_commands(
         "world": world[1],
         "replay_of": Path(run.outcome.source).name,
         "time_offset_ns": str(offset),
+        **start_metadata(injected.start),
         **injected.metadata,
     }
     code = session_code(catalog.catalog, behaviors, allow_unimplemented=False)

@@ -13,6 +13,7 @@ report says so.
 from __future__ import annotations
 
 import functools
+import math
 import os
 import time
 from collections.abc import Sequence
@@ -38,6 +39,7 @@ from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered,
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.progress import ProgressFactory
 from aeroexec.recording.reader import attachment_place
+from aeroexec.recording.transitions import read_timeline
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
@@ -81,6 +83,9 @@ class ReplayOptions:
     trust_recording: bool = False
     #: Closed loop: faults to strike (`--inject FAULT@WHEN`).
     injections: tuple[Injection, ...] = ()
+    #: A flight's recording replayed in the simulator, which takes the vehicle's place
+    #: from the state the flight started in (its simulated twin; closed loop).
+    twin: bool = False
     #: Property files (and `aeroexec:safety`) to check the replay's recording against,
     #: where it runs (`output` must be set): the verdicts travel back in the result.
     spec: tuple[str, ...] = ()
@@ -206,8 +211,14 @@ def replay_recording(
         watchers = [ReplayedTime(advance, span_ms)] if advance is not None else []
         if mode is Mode.closed:
             mission = load_mission(options.mission) if options.mission is not None else None
-            # A live flight cannot be flown again: its recorded vehicle stands in for it.
-            closed_loop = functools.partial(replay_live, path) if is_live(run) else replay_closed
+            # A live flight cannot be flown again: its recorded vehicle stands in for it,
+            # or, for its twin, the simulator from where the flight started.
+            if options.twin:
+                closed_loop = functools.partial(replay_closed, start=flight_start(path, run))
+            elif is_live(run):
+                closed_loop = functools.partial(replay_live, path)
+            else:
+                closed_loop = replay_closed
             replayed, how = closed_loop(
                 run,
                 catalog,
@@ -294,12 +305,32 @@ def _injections(
         return ()
     if is_live(run) and options.injections:
         raise InjectionError(
-            "--inject on a flight's recording: replay the flight's simulated twin instead "
-            "(aeroexec explore does)"
+            "--inject on a flight's recording: a real flight cannot be flown again; "
+            "explore it (aeroexec explore), which injects into its simulated twin"
         )
     start = run.outcome.start_ns or 0
     end = (run.outcome.end_ns or 0) - start
     return recorded + resolve_injections(options.injections, path, end)
+
+
+def flight_start(path: str | os.PathLike[str], run: RecordedRun) -> tuple[float, float, float]:
+    """Where a flight started (x, y, yaw in degrees: its first recorded vehicle state),
+    for its simulated twin. `RecordingError` for a recording that is no flight's."""
+    if not is_live(run):
+        raise RecordingError(
+            "a simulated twin is made of a flight's recording (aeroexec fly)", Mark(str(path))
+        )
+    state = read_timeline(path).first_state or {}
+    try:
+        x, y = (float(v) for v in state["position"][:2])  # type: ignore[index]
+        yaw = math.degrees(float(state.get("yaw", 0.0)))  # type: ignore[arg-type]
+    except (KeyError, TypeError, ValueError):
+        raise RecordingError(
+            "the flight has no vehicle state to start its simulated twin from", Mark(str(path))
+        ) from None
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        raise RecordingError("the flight's first vehicle state is not a position", Mark(str(path)))
+    return (x, y, yaw)
 
 
 def _never_struck(injected: tuple[ResolvedInjection, ...], replayed: RunOutcome) -> list[str]:

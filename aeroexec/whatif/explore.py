@@ -29,8 +29,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from aeroexec.errors import Mark, RecordingError
 from aeroexec.plugins.discovery import BehaviorSources
-from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult
+from aeroexec.recording.reader import open_recording
+from aeroexec.recording.schemas import PROFILE
+from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, replay_recording
 from aeroexec.replay.executors import Executor, InlineExecutor
 from aeroexec.replay.inject import Injection
 from aeroexec.replay.tasks import ReplayTask
@@ -86,6 +89,8 @@ class ExploreResult:
     plan: Plan
     results: tuple[RunResult, ...]
     options: ExploreOptions = field(repr=False)
+    #: Twin -> the flight it stands for (recordings of `aeroexec fly`).
+    flights: dict[str, str] = field(default_factory=dict)
 
     def result(self, probe: Probe) -> RunResult:
         return self.results[probe.run]
@@ -186,11 +191,12 @@ def explore(
     recording. `executor`: where the runs go (already started; default this process).
     `on_planned` is told how many runs there are, `on_done` each run as it finishes.
     Input problems with a recording (unreadable, not MCAP) raise `AeroexecError`."""
-    the_plan = plan(recordings, options.kinds, options.offsets)
-    if on_planned is not None:
-        on_planned(len(the_plan.runs))
     out = Path(options.out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    twins = {twin_of(path, options): path if is_flight(path) else None for path in recordings}
+    the_plan = plan(list(twins), options.kinds, options.offsets)
+    if on_planned is not None:
+        on_planned(len(the_plan.runs))
     executor = executor if executor is not None else InlineExecutor()
     results: list[RunResult | None] = [None] * len(the_plan.runs)
     scratch = Path(tempfile.mkdtemp(prefix=".explore-", dir=out))
@@ -223,4 +229,34 @@ def explore(
     missing = [i for i, r in enumerate(results) if r is None]
     if missing:  # an executor that loses a task is a bug, not a verdict
         raise RuntimeError(f"{executor.name} executor returned no result for run {missing[0]}")
-    return ExploreResult(the_plan, tuple(r for r in results if r is not None), options)
+    flights = {twin: flight for twin, flight in twins.items() if flight is not None}
+    return ExploreResult(the_plan, tuple(r for r in results if r is not None), options, flights)
+
+
+def is_flight(path: str) -> bool:
+    """A recording of `aeroexec fly` (a live vehicle): explored in its simulated twin."""
+    return open_recording(path).metadata.get(PROFILE, {}).get("vehicle") == "mavlink"
+
+
+def twin_of(path: str, options: ExploreOptions) -> str:
+    """The recording explore strikes faults into: `path` itself, or for a flight its
+    simulated twin (made here, kept in the output directory: the violations' commands
+    replay it). A twin that cannot be made is the flight's input error."""
+    if not is_flight(path):
+        return path
+    twin = str(Path(options.out_dir) / f"{_slug(Path(path).stem)}--twin.mcap")
+    result = replay_recording(
+        path,
+        ReplayOptions(
+            catalog=options.catalog,
+            mode=Mode.closed,
+            output=twin,
+            behaviors=options.behaviors,
+            mission=options.mission,
+            trust_recording=options.trust_recording,
+            twin=True,
+        ),
+    )
+    if result.error is not None:
+        raise RecordingError(f"its simulated twin could not be made: {result.error}", Mark(path))
+    return twin

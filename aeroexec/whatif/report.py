@@ -47,7 +47,9 @@ def text(result: ExploreResult) -> str:
     kinds = list(result.options.kinds)
     for recording in result.plan.transitions:
         rows = _rows(result, recording)
-        lines.append(f"{recording}: {len(rows)} moment(s) x {len(kinds)} fault(s)")
+        flight = result.flights.get(recording)
+        twin = f" (the simulated twin of the flight {flight})" if flight else ""
+        lines.append(f"{recording}{twin}: {len(rows)} moment(s) x {len(kinds)} fault(s)")
         width = max([len("transition"), *(len(first.row) for first, _ in rows)])
         widths = [max(len(k), len("VIOLATED")) for k in kinds]
         header = f"  {'transition':<{width}}  {'at s':>7}  " + "  ".join(
@@ -63,9 +65,7 @@ def text(result: ExploreResult) -> str:
             lines.append(f"  {first.row:<{width}}  {at:>7.2f}  {cells}".rstrip())
     groups = result.groups()
     if groups:
-        lines.append(
-            "violations by cause (property, at a transition of this kind, of this behavior):"
-        )
+        lines.append("violations by cause (property at transition kind and behavior):")
         for group in groups:
             names = ", ".join(f"{p.fault}@{p.row}" for p in group.probes[:SHOWN])
             more = len(group.probes) - SHOWN
@@ -140,6 +140,7 @@ def as_json(result: ExploreResult) -> str:
             }
             for g in result.groups()
         ],
+        "twins": [{"flight": f, "twin": t} for t, f in result.flights.items()],
         "summary": _summary(result),
     }
     return json.dumps(body, indent=2) + "\n"
