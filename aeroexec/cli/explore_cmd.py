@@ -162,11 +162,8 @@ def explore_command(
         raise typer.Exit(2)
     paths = [item.path for item in inputs]
     replay_args = [
-        *(["-c", str(catalog)] if catalog is not None else []),
-        *(["-m", str(mission)] if mission is not None else []),
-        *(["--trust-recording"] if trust_recording else []),
         *(arg for b in behaviors or () for arg in ("-b", b)),
-        *(arg for s in specs for arg in ("--spec", s)),
+        *(arg for d in disable_plugin or () for arg in ("--disable-plugin", d)),
     ]
     options = ExploreOptions(
         out_dir=output_dir,

@@ -56,8 +56,8 @@ class ExploreOptions:
     mission: str | None = None
     trust_recording: bool = False
     behaviors: BehaviorSources | None = None
-    #: The options of `aeroexec replay` that select what the runs used (catalog, mission,
-    #: behaviors, properties), for the command line that reproduces a violation.
+    #: More options of `aeroexec replay` that select what the runs used (the behaviors:
+    #: `-b ...`), for the command line that reproduces a violation.
     replay_args: tuple[str, ...] = ()
 
 
@@ -138,7 +138,11 @@ def reproduce_command(run: Run, kept: str, options: ExploreOptions) -> str:
             "aeroexec",
             "replay",
             run.recording,
+            *(("-c", options.catalog) if options.catalog is not None else ()),
+            *(("-m", options.mission) if options.mission is not None else ()),
+            *(("--trust-recording",) if options.trust_recording else ()),
             *options.replay_args,
+            *(arg for spec in options.spec for arg in ("--spec", spec)),
             "--inject",
             f"{run.fault}@{run.when}",
             "--check",
