@@ -14,12 +14,15 @@ an optional `#N` (default 1) and offset (`activate:LAND+0.5s`, `end:TAKE_OFF-1s`
 
 from __future__ import annotations
 
+import json
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from aeroexec.errors import InjectionError, Mark
-from aeroexec.recording.reader import RecordedCall, RecordedTopic, open_recording
+from aeroexec.recording.reader import open_recording
+from aeroexec.recording.schemas import MESSAGE_ENCODING, SERVICE_CALL
 
 NS_PER_S = 1_000_000_000
 KINDS = ("activate", "end", "capability")
@@ -86,8 +89,12 @@ def read_transitions(path: str | os.PathLike[str]) -> tuple[RecordedTransition, 
     return read_timeline(path).transitions
 
 
-def read_timeline(path: str | os.PathLike[str]) -> Timeline:
-    """One pass over the recording: its transitions, length and first vehicle state."""
+def read_timeline(
+    path: str | os.PathLike[str], enough: Callable[[list[RecordedTransition]], bool] | None = None
+) -> Timeline:
+    """One pass over the recording: its transitions, length and first vehicle state.
+    `enough(transitions so far)`: stop reading as soon as it says so (then the length is
+    where reading stopped)."""
     found: list[RecordedTransition] = []
     first_state: dict[str, object] | None = None
     last = 0
@@ -99,38 +106,67 @@ def read_timeline(path: str | os.PathLike[str]) -> Timeline:
         n = counts[(kind, name)] = counts.get((kind, name), 0) + 1
         found.append(RecordedTransition(kind, name, n, t_ns, detail))
 
-    for record in open_recording(path).records():
+    for message in open_recording(path).messages():
+        if enough is not None and enough(found):
+            break
         if origin is None:
-            origin = record.log_time_ns if record.log_time_ns >= ABSOLUTE_NS else 0
-        t_ns = record.log_time_ns - origin
+            origin = message.log_time_ns if message.log_time_ns >= ABSOLUTE_NS else 0
+        t_ns = message.log_time_ns - origin
         last = max(last, t_ns)
-        if isinstance(record, RecordedCall):
+        channel = message.channel
+        name = _inside(channel.topic)
+        # Only the few channels transitions come from are decoded (a long recording is
+        # mostly vehicle states, of which only the first is wanted).
+        is_call = channel.schema_name == SERVICE_CALL
+        if is_call and name != "activate_behavior":
+            continue
+        if not is_call and name not in _TOPICS:
+            continue
+        if name == "vehicle/state" and first_state is not None:
+            continue
+        if channel.message_encoding != MESSAGE_ENCODING:
+            continue
+        try:
+            data = json.loads(message.data)
+        except ValueError:
+            continue
+        if not isinstance(data, dict):
+            continue
+        if is_call:
+            request, response = data.get("request"), data.get("response")
             if (
-                record.service == "activate_behavior"
-                and record.parent_seq is None
-                and record.ok
-                and isinstance(record.request.get("behavior"), str)
+                isinstance(request, dict)
+                and isinstance(response, dict)
+                and data.get("parent_seq") is None
+                and response.get("ok")
+                and isinstance(request.get("behavior"), str)
             ):
-                add("activate", record.request["behavior"], t_ns)
-            continue
-        if not isinstance(record, RecordedTopic) or not isinstance(record.data, dict):
-            continue
-        if record.name == "vehicle/state" and first_state is None:
-            first_state = record.data
-        elif record.name == "behavior_event":
-            behavior = record.data.get("name")
+                add("activate", request["behavior"], t_ns)
+        elif name == "vehicle/state":
+            first_state = data
+        elif name == "behavior_event":
+            behavior = data.get("name")
             if isinstance(behavior, str) and behavior:
-                add("end", behavior, t_ns, str(record.data.get("code", "")))
-        elif record.name == "list_of_active_capabilities":
-            now = _referenced(record.data)
-            for name in held:
-                if name not in now:
-                    add("capability", "-" + name, t_ns)
-            for name in now:
-                if name not in held:
-                    add("capability", "+" + name, t_ns)
+                add("end", behavior, t_ns, str(data.get("code", "")))
+        else:  # list_of_active_capabilities
+            now = _referenced(data)
+            for cap in held:
+                if cap not in now:
+                    add("capability", "-" + cap, t_ns)
+            for cap in now:
+                if cap not in held:
+                    add("capability", "+" + cap, t_ns)
             held = now
     return Timeline(tuple(found), last, first_state)
+
+
+_TOPICS = frozenset({"behavior_event", "list_of_active_capabilities", "vehicle/state"})
+
+
+def _inside(topic: str) -> str:
+    """The topic inside the drone's namespace (`/drone1/behavior_event` -> `behavior_event`)."""
+    parts = topic.split("/", 2)
+    return parts[2] if len(parts) == 3 and parts[0] == "" else topic.lstrip("/")
 
 
 def _referenced(data: dict[str, object]) -> tuple[str, ...]:
@@ -142,6 +178,20 @@ def _referenced(data: dict[str, object]) -> tuple[str, ...]:
         for c in items
         if isinstance(c, dict) and isinstance(c.get("name"), str) and (c.get("references") or 0) > 0
     )
+
+
+def is_time(when: str) -> bool:
+    """Whether WHEN is a time (`12.5s`), which needs no transition."""
+    return _TIME.fullmatch(when.strip()) is not None
+
+
+def named(when: str) -> tuple[str, str, int] | None:
+    """The transition (kind, name, occurrence) a WHEN names, None for a time or a WHEN
+    that does not parse (`resolve_when` says why)."""
+    match = _TRANSITION.fullmatch(when.strip())
+    if match is None or _TIME.fullmatch(when.strip()) or match["kind"] not in KINDS:
+        return None
+    return (match["kind"], match["name"], int(match["n"]) if match["n"] else 1)
 
 
 def _seconds_ns(text: str) -> int:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
 from aeroexec.errors import InjectionError
@@ -24,7 +24,9 @@ from aeroexec.recording.transitions import (
     NS_PER_S,
     Moment,
     RecordedTransition,
-    read_transitions,
+    is_time,
+    named,
+    read_timeline,
     resolve_when,
 )
 from aeroexec.vehicles.faults import FaultSpec, parse_fault
@@ -85,17 +87,44 @@ def resolve_injections(
     end_ns: int,
     transitions: tuple[RecordedTransition, ...] | None = None,
 ) -> tuple[ResolvedInjection, ...]:
-    """Each injection's time in the recording (read once, if one needs it)."""
+    """Each injection's time in the recording of length `end_ns`; its transitions are
+    read once if one needs them, only as far as the last one named."""
+    injections = list(injections)
+    wanted = [named(i.when) for i in injections if i.due_ns is None and not is_time(i.when)]
     resolved = []
     for injection in injections:
         if injection.due_ns is not None:
             resolved.append(ResolvedInjection(injection, injection.due_ns))
             continue
-        if transitions is None:
-            transitions = read_transitions(recording)
-        moment: Moment = resolve_when(injection.when, transitions, end_ns, str(recording))
+        if transitions is None and not is_time(injection.when):
+            transitions = read_timeline(recording, _until_found(wanted)).transitions
+        moment: Moment = resolve_when(injection.when, transitions or (), end_ns, str(recording))
         resolved.append(ResolvedInjection(injection, moment.due_ns))
     return tuple(resolved)
+
+
+def _until_found(
+    wanted: list[tuple[str, str, int] | None],
+) -> Callable[[list[RecordedTransition]], bool] | None:
+    """Stop reading once every transition named has happened (a time, or a WHEN that
+    does not parse, needs no transition; one that names none that exists reads all)."""
+    if any(w is None for w in wanted):
+        return None
+    needed: dict[tuple[str, str], int] = {}
+    for kind, name, n in (w for w in wanted if w is not None):
+        needed[(kind, name)] = max(n, needed.get((kind, name), 0))
+    looked = 0
+
+    def enough(found: list[RecordedTransition]) -> bool:
+        nonlocal looked
+        for transition in found[looked:]:
+            key = (transition.kind, transition.name)
+            if needed.get(key, 0) and transition.occurrence >= needed[key]:
+                del needed[key]
+        looked = len(found)
+        return not needed
+
+    return enough
 
 
 def injected_metadata(resolved: Iterable[ResolvedInjection]) -> dict[str, str]:

@@ -204,3 +204,19 @@ def parse_fault(text: str) -> FaultSpec:
     elif rest or text.endswith(":"):
         raise InjectionError(f"{kind.name}: nothing after ':' (write {kind.name} alone)")
     return FaultSpec(kind.name, tuple(given))
+
+
+def markdown_table() -> str:
+    """The registry as docs/whatif.md shows it (a test keeps the page true)."""
+    lines = [
+        "| kind | parameters (default) | what the simulator does | vehicle reports |",
+        "| --- | --- | --- | --- |",
+    ]
+    for kind in FAULT_KINDS.values():
+        parameters = "; ".join(
+            f"`{p.name}` {p.unit} ({p.default:g}; {p.minimum:g} to {p.maximum:g}): {p.meaning}"
+            for p in kind.parameters
+        )
+        reports = f"`{kind.reports}`" if kind.reports else "nothing"
+        lines.append(f"| `{kind.name}` | {parameters or 'none'} | {kind.effect} | {reports} |")
+    return "\n".join(lines) + "\n"

@@ -83,7 +83,7 @@ def text(result: ExploreResult) -> str:
     late = sum(1 for p in result.plan.probes if result.result(p).notes)
     if late:
         lines.append(
-            f"note: {late} injection(s) were due after the session had ended: never struck"
+            f"note: {late} injection(s) were due after the session had ended (never struck)"
         )
     lines.append(_summary(result))
     return "\n".join(lines) + "\n"
