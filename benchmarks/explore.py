@@ -11,9 +11,10 @@
 * memory flat in the number of runs: the peak (tracemalloc) of a process that runs
   every injection itself (inline), with 3 offsets besides each transition (4x the runs)
   over the peak without; target <= 1.10x;
-* reproduction: each violation explore reports (one per cause and fault) replayed
-  `--reproduce` times (default 100): the same bytes and the same violated properties
-  every time; target: all of them.
+* reproduction: every violation explore reports on Appendix C, with the default catalog
+  and with the planted ordering defect of tests/fixtures/whatif/land_conflict.yaml,
+  replayed `--reproduce` times (default 100): the same bytes and the same violated
+  properties every time; target: all of them.
 
 Prints every figure with its baseline, ratio and target; exits 1 if a target is missed.
 
@@ -45,6 +46,7 @@ from aeroexec.whatif import ExploreOptions, explore
 
 ROOT = Path(__file__).resolve().parent.parent
 MISSION = ROOT / "missions" / "appendix_c.py"
+DEFECT = ROOT / "tests" / "fixtures" / "whatif" / "land_conflict.yaml"
 EXPLORE_TARGET_S = 60.0
 SPEED_TARGET = 500.0
 MEMORY_RATIO_TARGET = 1.10
@@ -159,7 +161,7 @@ def main() -> int:
         )
         figures.append(
             Figure(
-                f"explore driver peak, {many} runs (tracemalloc)",
+                f"explore peak, one process running {many} runs (tracemalloc)",
                 many_kib * 1024,
                 few_kib * 1024,
                 f"{few} runs",
@@ -168,17 +170,22 @@ def main() -> int:
             )
         )
 
-        # 4. every kind of counterexample, replayed again and again.
-        found = explore(
-            [str(appendix_c)],
-            ExploreOptions(out_dir=str(directory / "found"), trust_recording=True),
-        )
-        samples_by_cause = {}
-        for run in found.results:
-            if run.outcome == "violated":
-                samples_by_cause.setdefault((run.run.fault, run.violated), run)
+        # 4. every counterexample, of the default catalog and of a planted defect,
+        # replayed again and again.
+        defect = directory / "land_conflict.mcap"
+        with contextlib.redirect_stdout(io.StringIO()):
+            simulate(SessionConfig(mission=MISSION, record=defect, catalog=DEFECT))
+        counterexamples = []
+        for recording in (appendix_c, defect):
+            found = explore(
+                [str(recording)],
+                ExploreOptions(
+                    out_dir=str(directory / f"found-{recording.stem}"), trust_recording=True
+                ),
+            )
+            counterexamples += [(recording, r) for r in found.results if r.outcome == "violated"]
         same = total = 0
-        for run in samples_by_cause.values():
+        for recording, run in counterexamples:
             assert run.kept is not None
             original = Path(run.kept).read_bytes()
             options = ReplayOptions(
@@ -188,14 +195,14 @@ def main() -> int:
                 spec=SAFETY,
             )
             for _ in range(max(1, args.reproduce)):
-                again = replay_recording(appendix_c, options)
+                again = replay_recording(recording, options)
                 total += 1
                 data = (directory / "again.mcap").read_bytes()
                 same += data == original and again.violated == run.violated
         figures.append(
             Figure(
-                f"counterexamples reproduced ({len(samples_by_cause)} causes x "
-                f"{max(1, args.reproduce)} replays)",
+                f"counterexamples reproduced ({len(counterexamples)} x "
+                f"{max(1, args.reproduce)} replays: same bytes, same violations)",
                 same,
                 total,
                 "replays",

@@ -295,13 +295,14 @@ def replay(
     discovered_behaviors(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
-    if spec and shard is not None:
+    injections = tuple(parse_injection(text) for text in inject or ())  # so is a bad FAULT
+    if (spec or injections) and shard is not None:
         # `report merge` does not carry the shards' property verdicts yet: a merged
         # --check would pass a violation.
+        given = "--spec" if spec else "--inject (checked against aeroexec:safety)"
         raise AeroexecError(
-            "--spec with --shard is not supported yet (report merge drops the verdicts)"
+            f"{given} with --shard is not supported yet (report merge drops the verdicts)"
         )
-    injections = tuple(parse_injection(text) for text in inject or ())  # so is a bad FAULT
     if injections:
         spec = with_safety(spec)
     properties = load_spec(spec)  # so is a bad property file
@@ -309,7 +310,9 @@ def replay(
         kept = True
         if properties is not None and output is None and out_dir is None:
             if executor.startswith("ray://"):
-                raise AeroexecError("--spec checks each replay's recording: not on a cluster")
+                raise AeroexecError(
+                    "--spec and --inject check each replay's recording: not on a cluster"
+                )
             # The properties are checked on each replay's recording: write them somewhere.
             out_dir = scratch.enter_context(tempfile.TemporaryDirectory(prefix="aeroexec-"))
             kept = False
