@@ -321,10 +321,11 @@ def flight_start(path: str | os.PathLike[str], run: RecordedRun) -> tuple[float,
             "a simulated twin is made of a flight's recording (aeroexec fly)", Mark(str(path))
         )
     state = read_timeline(path).first_state or {}
+    position, yaw_rad = state.get("position"), state.get("yaw", 0.0)
     try:
-        x, y = (float(v) for v in state["position"][:2])  # type: ignore[index]
-        yaw = math.degrees(float(state.get("yaw", 0.0)))  # type: ignore[arg-type]
-    except (KeyError, TypeError, ValueError):
+        x, y = (float(v) for v in position[:2])  # type: ignore[index]
+        yaw = math.degrees(float(yaw_rad))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
         raise RecordingError(
             "the flight has no vehicle state to start its simulated twin from", Mark(str(path))
         ) from None
