@@ -111,3 +111,9 @@ class ReportError(AeroexecError):
 class PropertyError(AeroexecError):
     """A property file (signal temporal logic) cannot be read: bad YAML, a formula that
     does not parse, a signal no recording has."""
+
+
+class InjectionError(AeroexecError):
+    """A fault to inject (`replay --inject FAULT@WHEN`, `explore --faults`) is not one the
+    simulator models, a parameter is unknown or out of range, or WHEN names no moment of
+    the recording."""

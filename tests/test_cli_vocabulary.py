@@ -82,7 +82,7 @@ SHORT_FLAGS = set(
     re.search(r"Short flags are these and no others: `([^`]+)`", DOC.read_text())[1].split()  # type: ignore[index]
 )
 METAVAR_WORDS = {
-    word for word in _ticked(_section("Metavars")) if re.fullmatch(r"[A-Z][A-Z0-9_/=]*", word)
+    word for word in _ticked(_section("Metavars")) if re.fullmatch(r"[A-Z][A-Z0-9_/=@]*", word)
 }
 COLOR_COMMANDS = {
     f"aeroexec {name}"

@@ -24,6 +24,9 @@ POWER_FAULTS = ("battery_empty",)
 #: is, which must not pass for hovering). Behaviors that move are caught by their
 #: progress watch instead (WRONG_PROGRESS, with the fault in the event's detail).
 MOTOR_FAULTS = ("stuck_motor",)
+#: The position estimate is lost: no position goal can be flown to (the vehicle is
+#: landing by its own failsafe). LAND does not list it: landing needs no position.
+POSITION_FAULTS = ("position_lost",)
 #: No progress for this long (s) is WRONG_PROGRESS, for every goal-seeking behavior.
 PROGRESS_WINDOW = 5.0
 #: A vehicle at or below this speed (m/s) counts as stopped.
@@ -124,7 +127,7 @@ class MotionBehavior(Behavior):
     """
 
     _keep_command = False
-    fails_on_faults = LINK_FAULTS + POWER_FAULTS
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + POSITION_FAULTS
 
     def achieved(self, detail: str = "") -> Finished:
         self._keep_command = True

@@ -9,6 +9,7 @@ from typing import Any
 from aeroexec.behaviors._support import (
     LINK_FAULTS,
     MOTOR_FAULTS,
+    POSITION_FAULTS,
     POWER_FAULTS,
     PROGRESS_WINDOW,
     STOPPED_SPEED,
@@ -31,7 +32,7 @@ class KeepHovering(MotionBehavior):
     argument_names = ("DURATION", "ARUCO")
     needs = FlightState.FLYING
     default_duration = 5.0
-    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS + POSITION_FAULTS
 
     def check_situation(self, beliefs: Beliefs) -> Situation:
         return must_be_flying(beliefs)
@@ -57,7 +58,7 @@ class StartHovering(MotionBehavior):
 
     name = "START_HOVERING"
     argument_names = ()
-    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS
+    fails_on_faults = LINK_FAULTS + POWER_FAULTS + MOTOR_FAULTS + POSITION_FAULTS
     needs = FlightState.FLYING
 
     def check_situation(self, beliefs: Beliefs) -> Situation:

@@ -71,6 +71,13 @@ COMMANDS: dict[str, CommandEntry] = {
         "(within --tolerance), the final vehicle state; and the commands only one of them "
         "has (the mission took another path).",
     ),
+    "explore": CommandEntry(
+        "explore_cmd",
+        "Strike every fault the simulator models at every transition of recorded missions "
+        "(each activation, each end, each capability referenced or released, plus "
+        "--offsets) and report, per transition and fault, whether the system held, the "
+        "mission failed cleanly, or a property was violated (aeroexec:safety and --spec).",
+    ),
     "check": CommandEntry(
         "check_cmd",
         "Check recordings against properties in signal temporal logic (STL): what must "

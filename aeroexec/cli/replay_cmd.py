@@ -41,6 +41,7 @@ from aeroexec.cli.spec import (
     check_recording,
     load_spec,
     verdicts_text,
+    with_safety,
     with_verdicts_json,
     with_verdicts_junit,
 )
@@ -51,6 +52,7 @@ from aeroexec.progress import ProgressFactory, progress_bar
 from aeroexec.replay.diff import Tolerance
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
 from aeroexec.replay.executors import LOCAL, InlineExecutor, executor_for, replay_many
+from aeroexec.replay.inject import Injection, parse_injection
 from aeroexec.replay.inputs import expand_inputs
 from aeroexec.replay.merge import shard_json
 from aeroexec.replay.report import replay_json, replay_junit, replay_text, start_timing
@@ -236,6 +238,18 @@ def replay(
             "command stream is replayed and no code from the file runs.",
         ),
     ] = False,
+    inject: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--inject",
+            metavar="FAULT@WHEN",
+            show_default=False,
+            help="Closed loop: strike a simulator fault (low_battery:level=15, stuck_motor, "
+            "lost_link, lost_position, wind_gust) at a time (12.5s) or a transition of the "
+            "recording (end:TAKE_OFF, activate:GO_TO_POINT#2+0.5s) (repeatable); the replay "
+            "is checked against --spec and aeroexec:safety (docs/whatif.md).",
+        ),
+    ] = None,
 ) -> None:
     """Replay recorded missions against a new catalog or code version and report, per
     mission command, what changed: accepted/rejected, preemptions, capabilities and
@@ -263,6 +277,11 @@ def replay(
     With --spec, every replay is also checked against properties (docs/properties.md):
     with --check a replay passes only if they hold.
 
+    With --inject, the replay strikes faults at moments of the recording and is checked
+    against aeroexec:safety (and --spec); it is expected to differ from the recording, so
+    --check fails it only for a violated property (docs/whatif.md):
+      aeroexec replay flight.mcap --trust-recording --inject lost_link@end:TAKE_OFF --check
+
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs or violates a property; 2 an input could not be read (one line on stderr each).
     """
@@ -277,18 +296,24 @@ def replay(
     discovered_behaviors(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
-    if spec and shard is not None:
+    injections = tuple(parse_injection(text) for text in inject or ())  # so is a bad FAULT
+    if (spec or injections) and shard is not None:
         # `report merge` does not carry the shards' property verdicts yet: a merged
         # --check would pass a violation.
+        given = "--spec" if spec else "--inject (checked against aeroexec:safety)"
         raise AeroexecError(
-            "--spec with --shard is not supported yet (report merge drops the verdicts)"
+            f"{given} with --shard is not supported yet (report merge drops the verdicts)"
         )
+    if injections:
+        spec = with_safety(spec)
     properties = load_spec(spec)  # so is a bad property file
     with contextlib.ExitStack() as scratch:
         kept = True
         if properties is not None and output is None and out_dir is None:
             if executor.startswith("ray://"):
-                raise AeroexecError("--spec checks each replay's recording: not on a cluster")
+                raise AeroexecError(
+                    "--spec and --inject check each replay's recording: not on a cluster"
+                )
             # The properties are checked on each replay's recording: write them somewhere.
             out_dir = scratch.enter_context(tempfile.TemporaryDirectory(prefix="aeroexec-"))
             kept = False
@@ -313,6 +338,7 @@ def replay(
                 started=started,
                 properties=properties,
                 kept=kept,
+                injections=injections,
             )
         )
 
@@ -341,6 +367,7 @@ class _Run:
     properties: PropertySet | None
     #: The outputs are the user's (else a scratch directory for --spec, not reported).
     kept: bool
+    injections: tuple[Injection, ...] = ()
 
 
 def _replay(run: _Run) -> None:
@@ -376,6 +403,7 @@ def _replay(run: _Run) -> None:
         behaviors=sources,
         mission=str(mission) if mission is not None else None,
         trust_recording=trust_recording,
+        injections=run.injections,
     )
     inputs = expand_inputs(recordings)
     part = None
@@ -445,5 +473,7 @@ def _replay(run: _Run) -> None:
     if any(r.error is not None for r in results):
         raise typer.Exit(2)
     violated = any(report.failed for report in checked)
-    if check and (violated or not all(r.equal for r in results)):
+    # An injected replay is meant to differ: only what its properties say fails it.
+    differs = not run.injections and not all(r.equal for r in results)
+    if check and (violated or differs):
         raise typer.Exit(1)

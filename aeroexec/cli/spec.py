@@ -52,6 +52,16 @@ def print_verdicts(verdicts: list[Verdict], source: str) -> bool:
     return report.failed
 
 
+#: The properties every what-if run is checked against, besides the user's.
+SAFETY = "aeroexec:safety"
+
+
+def with_safety(spec: list[str] | None) -> list[str]:
+    """`spec` with `aeroexec:safety` (first, unless it is already there)."""
+    given = list(spec or ())
+    return given if SAFETY in given else [SAFETY, *given]
+
+
 def load_spec(spec: list[str] | None) -> PropertySet | None:
     """The properties of --spec (None without it); `PropertyError` for a bad file."""
     if not spec:

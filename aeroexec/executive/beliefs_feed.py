@@ -16,13 +16,16 @@ from __future__ import annotations
 
 import math
 
-from aeroexec.executive.beliefs import Beliefs, Compound
+from aeroexec.executive.beliefs import Beliefs, Compound, Var
 from aeroexec.vehicles.base import VehicleState
 
+#: The vehicle fault of a lost position estimate (aeroexec/vehicles/faults.py).
+POSITION_LOST = "position_lost"
 #: Below this charge (percent) `battery_level(self, LOW)`.
 LOW_BATTERY_PERCENT = 20
 
 _FLYING = Compound("flying", ("self",))
+_ANY_POSITION = Compound("position", ("self", Var("")))
 _FLIGHT_STATES = {
     True: Compound("flight_state", ("self", "FLYING")),
     False: Compound("flight_state", ("self", "LANDED")),
@@ -65,7 +68,11 @@ def update_beliefs(beliefs: Beliefs, state: VehicleState) -> int:
     # A value that is not a number (a vehicle's bad estimate) leaves its belief as it was:
     # believing "nan" would be wrong, and rounding it would raise.
     x, y, z = state.position
-    if math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
+    if state.fault == POSITION_LOST:
+        # No estimate, no belief: a mission that asks where it is learns that it does not
+        # know (Appendix C's "Position unknown, landing..." path), not a stale answer.
+        changes += beliefs.remove(_ANY_POSITION)
+    elif math.isfinite(x) and math.isfinite(y) and math.isfinite(z):
         changes += beliefs.add(Compound("position", ("self", (_cm(x), _cm(y), _cm(z)))))
     if math.isfinite(state.battery):
         percent = battery_percent(state.battery)

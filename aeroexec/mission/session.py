@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -41,7 +41,7 @@ from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
-    from aeroexec.vehicles.world import World
+    from aeroexec.vehicles.world import ScheduledFailure, World
 
 
 #: A mission that never ends is stopped after one simulated day.
@@ -62,6 +62,13 @@ class SessionConfig:
     allow_unimplemented: bool = False
     #: The session ends when the simulated clock reaches this (None: never).
     max_sim_time_s: float | None = DEFAULT_MAX_SIM_TIME_S
+    #: Failures struck into the world besides its own (`replay --inject`), and the
+    #: metadata that records them.
+    injected: tuple[ScheduledFailure, ...] = ()
+    injected_metadata: Mapping[str, str] = field(default_factory=dict)
+    #: Where the vehicle starts instead of the world's: (x, y, yaw in degrees), on the
+    #: ground (a flight's simulated twin starts where the flight did).
+    start: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -92,10 +99,40 @@ def _world_text(world_path: str | Path | None) -> tuple[str, str]:
     return read_text(path, "a world file", WorldError), str(path)
 
 
-def _build_vehicle(world_text: str, world_file: str, seed: int) -> SimVehicle:
-    from aeroexec.vehicles.world import parse_world
+#: The metadata key of a session that started elsewhere than its world's start.
+START = "start"
 
-    return SimVehicle(parse_world(world_text, world_file), seed=seed)
+
+def start_metadata(start: tuple[float, float, float] | None) -> dict[str, str]:
+    """`start=x,y,yaw` (exact floats), or nothing for the world's own start."""
+    return {START: ",".join(repr(float(v)) for v in start)} if start is not None else {}
+
+
+def recorded_start(metadata: Mapping[str, str]) -> tuple[float, float, float] | None:
+    """The start a session recorded (`start_metadata`), or None (also for a malformed
+    value: the world's start, as for a recording without one)."""
+    text = metadata.get(START)
+    if not text:
+        return None
+    try:
+        x, y, yaw = (float(v) for v in text.split(","))
+    except ValueError:
+        return None
+    return (x, y, yaw)
+
+
+def placed(world: World, start: tuple[float, float, float] | None) -> World:
+    """`world` with the vehicle starting at `start` (x, y, yaw degrees) on the ground."""
+    if start is None:
+        return world
+    return replace(world, start=(start[0], start[1], 0.0), start_yaw=start[2])
+
+
+def _build_vehicle(world_text: str, world_file: str, config: SessionConfig) -> SimVehicle:
+    from aeroexec.vehicles.world import parse_world, with_failures
+
+    world = with_failures(parse_world(world_text, world_file), config.injected)
+    return SimVehicle(placed(world, config.start), seed=config.seed)
 
 
 def session_observers(
@@ -195,7 +232,7 @@ def simulate(
     script = script if script is not None else load_mission(config.mission)
     code = session_code(catalog, config.behaviors, config.allow_unimplemented, announce)
     world_text, world_file = world if world is not None else _world_text(config.world)
-    vehicle = _build_vehicle(world_text, world_file, config.seed)
+    vehicle = _build_vehicle(world_text, world_file, config)
     metadata = {
         "aeroexec_version": __version__,
         "seed": str(config.seed),
@@ -206,6 +243,8 @@ def simulate(
         "mission": Path(script.path).name,
         "world": Path(str(config.world)).name if config.world else "default",
         **stand_in_metadata(code),
+        **start_metadata(config.start),
+        **config.injected_metadata,
     }
     attachments = {
         "catalog.yaml": catalog_text if catalog_text is not None else catalog.text,

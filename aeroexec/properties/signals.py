@@ -95,7 +95,7 @@ FAMILIES: dict[str, tuple[str, str, str]] = {
     "fault_": (
         "0/1",
         "fault K was seen, from that moment on (K: stuck_motor, battery_empty, link_lost, "
-        f"mode_changed, not_connected; low_battery when the charge falls below "
+        f"mode_changed, not_connected, position_lost; low_battery when the charge falls below "
         f"{LOW_BATTERY_LEVEL:g})",
         "vehicle/state fault, battery",
     ),

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import io
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,11 +32,14 @@ from aeroexec.mission.script import MissionScript, compile_mission
 from aeroexec.mission.session import (
     SessionConfig,
     end_recording,
+    placed,
+    recorded_start,
     recording_session,
     session_code,
     session_observers,
     simulate,
     stand_in_metadata,
+    start_metadata,
 )
 from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.recording.reader import attachment_place
@@ -44,7 +47,7 @@ from aeroexec.replay.collect import OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
 from aeroexec.vehicles.sim import SimVehicle
-from aeroexec.vehicles.world import DEFAULT_WORLD, parse_world
+from aeroexec.vehicles.world import DEFAULT_WORLD, ScheduledFailure, parse_world, with_failures
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,6 +58,15 @@ class ChosenCatalog:
     catalog: Catalog
     text: str
     name: str
+
+
+@dataclass(frozen=True, slots=True)
+class _Injected:
+    """Failures a replay strikes besides the world's own, and their metadata record."""
+
+    faults: tuple[ScheduledFailure, ...]
+    metadata: dict[str, str]
+    start: tuple[float, float, float] | None = None
 
 
 class _Discard(io.TextIOBase):
@@ -132,6 +144,9 @@ def replay_closed(
     mission: MissionScript | None = None,
     trust_recording: bool = False,
     watchers: Sequence[BusObserver] = (),
+    faults: tuple[ScheduledFailure, ...] = (),
+    faults_metadata: Mapping[str, str] | None = None,
+    start: tuple[float, float, float] | None = None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` in the simulator with `behaviors` (complete for the catalog, stand-ins
     included); the replay's outcome and notes about how.
@@ -139,7 +154,9 @@ def replay_closed(
     `mission`: the script to run (the user's copy); `trust_recording`: without one, run
     the script stored in the recording. Neither: the recorded command stream is replayed
     and no code from the recording runs. `watchers` observe the replay's bus too (its
-    progress)."""
+    progress). `faults` strike besides the world's own (`--inject`), and
+    `faults_metadata` records them. `start` (x, y, yaw degrees): where the vehicle
+    starts instead of the world's start (a flight's twin; a recording that says so)."""
     notes: list[str] = []
     metadata = run.metadata
     seed = _seed(metadata, notes)
@@ -148,8 +165,12 @@ def replay_closed(
     builder = OutcomeBuilder(horizon_ns)
     observer = OutcomeObserver(builder)
     script = script_to_run(run, mission, trust_recording, notes)
+    start = start if start is not None else recorded_start(metadata)
+    injected = _Injected(faults, dict(faults_metadata or {}), start)
     if script is None:
-        _replay_commands(run, catalog, behaviors, output, world, seed, drone, observer, watchers)
+        _replay_commands(
+            run, catalog, behaviors, output, world, seed, drone, observer, watchers, injected
+        )
     else:
         world_name = world[1]
         config = SessionConfig(
@@ -160,6 +181,9 @@ def replay_closed(
             record=output,
             drone=drone,
             behaviors=behaviors,
+            injected=injected.faults,
+            injected_metadata=injected.metadata,
+            start=start,
         )
         with mission_prints_discarded():
             result = simulate(
@@ -187,8 +211,10 @@ def _replay_commands(
     drone: str,
     observer: OutcomeObserver,
     watchers: Sequence[BusObserver],
+    injected: _Injected,
 ) -> None:
-    vehicle = SimVehicle(parse_world(*world), seed=seed)
+    world_model = with_failures(parse_world(*world), injected.faults)
+    vehicle = SimVehicle(placed(world_model, injected.start), seed=seed)
     # The simulation starts when the recording does (a live log's clock need not be 0).
     offset = run.outcome.start_ns or 0
     observer.offset_ns = offset
@@ -203,6 +229,8 @@ def _replay_commands(
         "world": world[1],
         "replay_of": Path(run.outcome.source).name,
         "time_offset_ns": str(offset),
+        **start_metadata(injected.start),
+        **injected.metadata,
     }
     code = session_code(catalog.catalog, behaviors, allow_unimplemented=False)
     metadata.update(stand_in_metadata(code))

@@ -13,30 +13,50 @@ report says so.
 from __future__ import annotations
 
 import functools
+import math
 import os
 import time
+from collections.abc import Sequence
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from aeroexec.bags.replay import bag_recording
 from aeroexec.bags.source import is_bag
 from aeroexec.catalog.loader import load_catalog, parse_catalog, strict
-from aeroexec.errors import AeroexecError, CatalogError, Mark, RecordingError, one_line
+from aeroexec.errors import (
+    AeroexecError,
+    CatalogError,
+    InjectionError,
+    Mark,
+    RecordingError,
+    one_line,
+)
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.progress import ProgressFactory
 from aeroexec.recording.reader import attachment_place
+from aeroexec.recording.transitions import read_timeline
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
 from aeroexec.replay.diff import DiffResult, Tolerance, diff_outcomes
+from aeroexec.replay.inject import (
+    Injection,
+    ResolvedInjection,
+    injected_metadata,
+    recorded_injections,
+    resolve_injections,
+)
 from aeroexec.replay.liveloop import is_live, replay_live
 from aeroexec.replay.openloop import replay_open
-from aeroexec.replay.outcome import NS_PER_S
+from aeroexec.replay.outcome import NS_PER_S, RunOutcome
 from aeroexec.replay.progress import ReplayedTime
+
+if TYPE_CHECKING:
+    from aeroexec.properties.spec import PropertySet
 
 
 class Mode(str, Enum):
@@ -61,6 +81,14 @@ class ReplayOptions:
     #: Closed loop without `mission`: run the script stored in the recording (code from
     #: a file the user may have received from anyone: never by default).
     trust_recording: bool = False
+    #: Closed loop: faults to strike (`--inject FAULT@WHEN`).
+    injections: tuple[Injection, ...] = ()
+    #: A flight's recording replayed in the simulator, which takes the vehicle's place
+    #: from the state the flight started in (its simulated twin; closed loop).
+    twin: bool = False
+    #: Property files (and `aeroexec:safety`) to check the replay's recording against,
+    #: where it runs (`output` must be set): the verdicts travel back in the result.
+    spec: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,6 +109,16 @@ class ReplayResult:
     #: Wall-clock seconds the replay took (JUnit's `time`); not part of the result's
     #: value: equal results compare equal however long they took.
     seconds: float | None = field(default=None, compare=False)
+    #: The faults struck (`FAULT@WHEN (at T s)`), a recording's own included.
+    injected: tuple[str, ...] = ()
+    #: What went wrong in the replay: refused activations and activations that ended in
+    #: a failure (`#4 GO_TO_POINT ...: PROCESS_FAILURE (vehicle fault: link_lost)`), the
+    #: mission's own failure.
+    failures: tuple[str, ...] = ()
+    #: With `spec`: the properties of severity error the replay violated (names), and
+    #: whether it was checked at all.
+    violated: tuple[str, ...] = ()
+    checked: bool = False
 
     @property
     def equal(self) -> bool:
@@ -100,6 +138,12 @@ class ReplayResult:
             "code_changes": list(self.code_changes),
             "notes": list(self.notes),
             "mission": self.diff.mission or None if self.diff else None,
+            **(
+                {"injected": list(self.injected), "failures": list(self.failures)}
+                if self.injected
+                else {}
+            ),
+            **({"violated": list(self.violated)} if self.checked else {}),
         }
 
 
@@ -158,6 +202,7 @@ def replay_recording(
             f"({len(run.outcome.commands)} commands) only"
         )
     mode = choose_mode(run, options.mode)
+    injected = _injections(path, run, options, mode)
     catalog = choose_catalog(run, options.catalog)
     behaviors = choose_behaviors(run, catalog, options.behaviors)
     span_ms = max(1, ((run.outcome.end_ns or 0) - (run.outcome.start_ns or 0)) // 1_000_000)
@@ -166,8 +211,14 @@ def replay_recording(
         watchers = [ReplayedTime(advance, span_ms)] if advance is not None else []
         if mode is Mode.closed:
             mission = load_mission(options.mission) if options.mission is not None else None
-            # A live flight cannot be flown again: its recorded vehicle stands in for it.
-            closed_loop = functools.partial(replay_live, path) if is_live(run) else replay_closed
+            # A live flight cannot be flown again: its recorded vehicle stands in for it,
+            # or, for its twin, the simulator from where the flight started.
+            if options.twin:
+                closed_loop = functools.partial(replay_closed, start=flight_start(path, run))
+            elif is_live(run):
+                closed_loop = functools.partial(replay_live, path)
+            else:
+                closed_loop = replay_closed
             replayed, how = closed_loop(
                 run,
                 catalog,
@@ -177,6 +228,7 @@ def replay_recording(
                 mission=mission,
                 trust_recording=options.trust_recording,
                 watchers=watchers,
+                **(_fault_arguments(injected) if injected else {}),
             )
         else:
             replayed, how = replay_open(
@@ -185,6 +237,7 @@ def replay_recording(
         for watcher in watchers:
             watcher.finish()
     notes.extend(how)
+    notes.extend(_never_struck(injected, replayed))
     changed = code_changes(run.code, code_manifest(behaviors, catalog.catalog).metadata())
     if not run.code:
         notes.append("the recording does not say which behavior code ran: code changes unknown")
@@ -202,6 +255,9 @@ def replay_recording(
         base_lines=lines_of[1],
     )
     notes.extend(diff.notes)
+    violated: tuple[str, ...] = ()
+    if options.spec and options.output is not None:
+        violated = _violated(options.output, options.spec)
     return ReplayResult(
         recording=name,
         mode=mode.value,
@@ -211,7 +267,107 @@ def replay_recording(
         output=str(options.output) if options.output is not None else None,
         notes=tuple(notes),
         code_changes=changed,
+        injected=tuple(r.describe() for r in injected),
+        failures=run_failures(replayed, how) if injected else (),
+        violated=violated,
+        checked=bool(options.spec and options.output is not None),
     )
+
+
+#: End events that are not a behavior's success (INTERRUPTED: stopped on purpose).
+FAILURE_CODES = frozenset({"TIME_OUT", "WRONG_PROGRESS", "ASSUMPTION_CONFLICT", "PROCESS_FAILURE"})
+
+
+def run_failures(outcome: RunOutcome, notes: Sequence[str]) -> tuple[str, ...]:
+    """What went wrong in a run: refused activations, failed ends, a mission that raised."""
+    found = []
+    for command in outcome.commands:
+        if command.activates and command.accepted is False:
+            found.append(f"{command.label}: refused ({command.error})")
+        elif command.end_code in FAILURE_CODES:
+            detail = f" ({command.end_detail})" if command.end_detail else ""
+            found.append(f"{command.label}: {command.end_code}{detail}")
+    found.extend(n for n in notes if n.startswith("the replayed mission raised"))
+    return tuple(found)
+
+
+def _injections(
+    path: str | os.PathLike[str], run: RecordedRun, options: ReplayOptions, mode: Mode
+) -> tuple[ResolvedInjection, ...]:
+    """The faults to strike: the recording's own (a replay's), then `--inject`'s,
+    resolved from the recording. `InjectionError` when one cannot be."""
+    recorded = recorded_injections(run.metadata, str(path))
+    if not options.injections and not recorded:
+        return ()
+    if mode is not Mode.closed:
+        if options.injections:
+            raise InjectionError("--inject strikes faults into the simulator: closed loop only")
+        return ()
+    if is_live(run) and options.injections:
+        raise InjectionError(
+            "--inject on a flight's recording: a real flight cannot be flown again; "
+            "explore it (aeroexec explore), which injects into its simulated twin"
+        )
+    start = run.outcome.start_ns or 0
+    end = (run.outcome.end_ns or 0) - start
+    return recorded + resolve_injections(options.injections, path, end)
+
+
+def flight_start(path: str | os.PathLike[str], run: RecordedRun) -> tuple[float, float, float]:
+    """Where a flight started (x, y, yaw in degrees: its first recorded vehicle state),
+    for its simulated twin. `RecordingError` for a recording that is no flight's."""
+    if not is_live(run):
+        raise RecordingError(
+            "a simulated twin is made of a flight's recording (aeroexec fly)", Mark(str(path))
+        )
+    state = read_timeline(path).first_state or {}
+    position, yaw_rad = state.get("position"), state.get("yaw", 0.0)
+    try:
+        x, y = (float(v) for v in position[:2])  # type: ignore[index]
+        yaw = math.degrees(float(yaw_rad))  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise RecordingError(
+            "the flight has no vehicle state to start its simulated twin from", Mark(str(path))
+        ) from None
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        raise RecordingError("the flight's first vehicle state is not a position", Mark(str(path)))
+    return (x, y, yaw)
+
+
+def _never_struck(injected: tuple[ResolvedInjection, ...], replayed: RunOutcome) -> list[str]:
+    """Notes for faults due after the replay had ended (the last transitions of a session)."""
+    end = (replayed.end_ns or 0) - (replayed.start_ns or 0)
+    return [
+        f"{r.injection} was due at {r.due_ns / NS_PER_S:.3f} s, after the replay ended "
+        f"({end / NS_PER_S:.3f} s): it never struck"
+        for r in injected
+        if r.due_ns > end
+    ]
+
+
+def _fault_arguments(injected: tuple[ResolvedInjection, ...]) -> dict[str, Any]:
+    return {
+        "faults": tuple(r.failure for r in injected),
+        "faults_metadata": injected_metadata(injected),
+    }
+
+
+def _violated(output: str, spec: tuple[str, ...]) -> tuple[str, ...]:
+    """The properties of severity error the recording `output` violates."""
+    # Imported here for start-up time: the properties bring numpy, which a replay without
+    # properties never needs.
+    from aeroexec.properties.check import check_recording
+
+    report = check_recording(output, _properties(spec))
+    return tuple(v.name for v in report.violated if v.property.severity == "error")
+
+
+@functools.lru_cache(maxsize=4)
+def _properties(spec: tuple[str, ...]) -> PropertySet:
+    """A worker reads the property files once for all the replays it runs."""
+    from aeroexec.properties.spec import load_properties
+
+    return load_properties(list(spec))
 
 
 def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:

@@ -117,6 +117,8 @@ def replay_text(results: Sequence[ReplayResult]) -> str:
         if result.diff is None:
             continue
         lines.append(replay_header(result))
+        lines.extend(f"  injected: {item}" for item in result.injected)
+        lines.extend(f"  failed: {item}" for item in result.failures)
         lines.extend(_diff_lines(result.diff, result.notes))
         lines.extend(f"  code changed: {change}" for change in result.code_changes)
         if result.output:

@@ -10,6 +10,7 @@ floats in a fixed order, and randomness comes only from `random.Random(seed)`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 from typing import Literal
@@ -81,6 +82,14 @@ class SimVehicle:
             rng_seed = self._random.seed
         self._rng = random.Random(self.world.seed if rng_seed is None else rng_seed)
         self._injected: list[tuple[float, str]] = []
+        # Faults that last (aeroexec/vehicles/faults.py): when each ends (ns), and what
+        # the executive was told when the link went (its view stays there until it is back).
+        self._link_until_ns: int | None = None
+        self._stale: VehicleState | None = None
+        self._position_until_ns: int | None = None
+        self._estimate: tuple[float, float] = (0.0, 0.0)
+        self._gust_until_ns: int | None = None
+        self._wind: Vec3 = (0.0, 0.0, 0.0)
 
     # -- observation ---------------------------------------------------------------------
     @property
@@ -97,15 +106,37 @@ class SimVehicle:
     def airborne(self) -> bool:
         return self._p[2] > 0.0
 
+    @property
+    def link_lost(self) -> bool:
+        return self._link_until_ns is not None
+
+    @property
+    def position_lost(self) -> bool:
+        return self._position_until_ns is not None
+
     def state(self) -> VehicleState:
+        if self._stale is not None:
+            return self._stale
+        return self._true_state()
+
+    def _true_state(self) -> VehicleState:
+        # The wind moves only a vehicle that flies (the ground holds the others).
+        pushed = self._mode != "idle" and self._fault != "stuck_motor"
+        wx, wy, wz = self._wind if pushed else (0.0, 0.0, 0.0)
+        position = (self._p[0], self._p[1], self._p[2])
+        fault = self._fault
+        if self._position_until_ns is not None:
+            # The altitude stays known (a barometer); the horizontal estimate is frozen.
+            position = (self._estimate[0], self._estimate[1], self._p[2])
+            fault = fault or "position_lost"
         return VehicleState(
-            position=(self._p[0], self._p[1], self._p[2]),
-            velocity=(self._v[0], self._v[1], self._v[2]),
+            position=position,
+            velocity=(self._v[0] + wx, self._v[1] + wy, self._v[2] + wz),
             yaw=self._yaw,
             battery=self._battery,
             flying=self._armed and self.airborne,
             armed=self._armed,
-            fault=self._fault,
+            fault=fault,
             maneuver="flip" if self._mode == "flip" else "",
         )
 
@@ -115,17 +146,25 @@ class SimVehicle:
         return dx * dx + dy * dy <= self.world.camera_range * self.world.camera_range
 
     def visible_markers(self) -> tuple[int, ...]:
+        if self.link_lost:
+            return ()  # the camera's images come over the link too
         return tuple(m.id for m in self.world.markers if self._sees(m.position))
 
     def visible_object(self) -> Vec3 | None:
         obj = self.world.object
-        if obj is None:
+        if obj is None or self.link_lost:
             return None
         where = obj.at(self.time)
         return where if self._sees(where) else None
 
     # -- commands ------------------------------------------------------------------------
-    def _refuse_if_unable(self, command: str, *, in_air: bool = True) -> None:
+    def _refuse_if_unable(
+        self, command: str, *, in_air: bool = True, needs_position: bool = True
+    ) -> None:
+        if self.link_lost:
+            raise VehicleCommandError(f"{command}: refused, the link is lost")
+        if needs_position and self.position_lost:
+            raise VehicleCommandError(f"{command}: refused, no position estimate")
         if self._fault == "stuck_motor":
             raise VehicleCommandError(f"{command}: refused, a motor is stuck")
         if self._mode == "flip":
@@ -145,7 +184,7 @@ class SimVehicle:
         self._position_mode((self._p[0], self._p[1], altitude))
 
     def land(self) -> None:
-        self._refuse_if_unable("land")
+        self._refuse_if_unable("land", needs_position=False)
         self._mode = "land"
         self._sp = (self._p[0], self._p[1], 0.0)
 
@@ -177,15 +216,19 @@ class SimVehicle:
         self._v_sp = (float(vx), float(vy), float(vz))
 
     def set_yaw(self, yaw: float) -> None:
-        self._refuse_if_unable("set_yaw")
+        self._refuse_if_unable("set_yaw", needs_position=False)
         if not math.isfinite(yaw):
             raise VehicleCommandError(f"set_yaw: not an angle: {yaw}")
         self._yaw_sp = _wrap(float(yaw))
 
     def hover(self) -> None:
+        if self.link_lost:
+            raise VehicleCommandError("hover: refused, the link is lost")
         # Holding still is what a stuck or flipping vehicle does anyway: not an error.
         if self._fault == "stuck_motor" or self._mode == "flip":
             return
+        if self.position_lost:
+            raise VehicleCommandError("hover: refused, no position estimate (landing)")
         # Braking to a hover would stop the forced landing of an empty battery.
         self._refuse_if_depleted("hover")
         if not self.airborne:
@@ -229,7 +272,11 @@ class SimVehicle:
             self._integrate(h)
         self._drain(dt)
         self._t_ns += round(dt * NS_PER_S)
+        self._expire()
         self._inject_failures(dt)
+        if self._link_until_ns is not None and self._stale is None:
+            # What the executive last heard, said with the fault from now on.
+            self._stale = dataclasses.replace(self._true_state(), fault="link_lost")
 
     def _integrate(self, h: float) -> None:
         if self._fault == "stuck_motor" or self._mode == "idle":
@@ -251,8 +298,9 @@ class SimVehicle:
             toward = self._velocity_toward((self._sp[0], self._sp[1], self._p[2]))
             target = (toward[0], toward[1], -min(LANDING_SPEED, self._vz))
         self._accelerate(target, h)
+        wind = self._wind
         for i in range(3):
-            self._p[i] += self._v[i] * h
+            self._p[i] += (self._v[i] + wind[i]) * h
         self._turn(h)
         self._settle()
         self._ground_contact()
@@ -339,10 +387,22 @@ class SimVehicle:
                 self._mode = "land"
                 self._sp = (self._p[0], self._p[1], 0.0)
 
+    def _expire(self) -> None:
+        """End the faults whose time is up (a fault lasts until the step that reaches
+        its end)."""
+        now = self._t_ns
+        if self._link_until_ns is not None and now >= self._link_until_ns:
+            self._link_until_ns = None
+            self._stale = None
+        if self._position_until_ns is not None and now >= self._position_until_ns:
+            self._position_until_ns = None
+        if self._gust_until_ns is not None and now >= self._gust_until_ns:
+            self._gust_until_ns = None
+            self._wind = (0.0, 0.0, 0.0)
+
     def _inject_failures(self, dt: float) -> None:
-        while self._pending and self._pending[0].at * NS_PER_S <= self._t_ns:
-            failure = self._pending.pop(0)
-            self._fail(failure.kind, failure.level)
+        while self._pending and round(self._pending[0].at * NS_PER_S) <= self._t_ns:
+            self._fail(self._pending.pop(0))
         spec = self._random
         if spec is None or spec.rate <= 0.0:
             return
@@ -350,12 +410,31 @@ class SimVehicle:
         # seed and the step sizes, never on what the vehicle was doing.
         if self._rng.random() < 1.0 - math.exp(-spec.rate * dt):
             self._random = None
-            self._fail(spec.kind, spec.level)
+            self._fail(spec)
 
-    def _fail(self, kind: str, level: float) -> None:
+    def _until(self, failure: ScheduledFailure | RandomFailure) -> int:
+        return self._t_ns + round(failure.value("duration") * NS_PER_S)
+
+    def _fail(self, failure: ScheduledFailure | RandomFailure) -> None:
+        kind = failure.kind
         self._injected.append((self.time, kind))
         if kind == "low_battery":
-            self._battery = min(self._battery, level)
+            self._battery = min(self._battery, failure.value("level"))
         elif kind == "stuck_motor":
             self._fault = "stuck_motor"
             self._v = [0.0, 0.0, 0.0]
+        elif kind == "lost_link":
+            self._link_until_ns = max(self._link_until_ns or 0, self._until(failure))
+        elif kind == "lost_position":
+            if self._position_until_ns is None:
+                self._estimate = (self._p[0], self._p[1])
+            self._position_until_ns = max(self._position_until_ns or 0, self._until(failure))
+            if self.airborne and not self._fault and self._mode != "land":
+                # The autopilot's failsafe: without a position it can only come down.
+                self._mode = "land"
+                self._sp = (self._p[0], self._p[1], 0.0)
+        elif kind == "wind_gust":
+            speed = failure.value("speed")
+            toward = math.radians(failure.value("direction"))
+            self._wind = (speed * math.cos(toward), speed * math.sin(toward), 0.0)
+            self._gust_until_ns = self._until(failure)

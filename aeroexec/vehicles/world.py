@@ -4,12 +4,17 @@ A world is a YAML file (see `aeroexec/data/worlds/default.yaml`); every value is
 and a bad one is reported as `WorldError` with the `file:line:col` of the offending
 node, the same way catalog errors read. Numbers are SI: metres, seconds, m/s; angles in
 world files are degrees because people write them that way.
+
+Failures (`failures:` at a time, `random_failure:` at a seeded random one) are the kinds of
+`aeroexec.vehicles.faults`, each with its parameters (`level`, `duration`, `speed`,
+`direction`) written in that registry's units; a parameter left out takes its documented
+default (docs/whatif.md#fault-kinds).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -18,13 +23,14 @@ from aeroexec.catalog.yamlnodes import YNode, load_yaml
 from aeroexec.errors import CatalogError, Mark, WorldError
 from aeroexec.inputs import read_text
 from aeroexec.vehicles.base import Vec3
+from aeroexec.vehicles.faults import FAULT_KINDS, KIND_NAMES, kinds_with, parameter_names
 
 WORLDS_DIR = Path(__file__).resolve().parent.parent / "data" / "worlds"
 DEFAULT_WORLD = WORLDS_DIR / "default.yaml"
 FAULTS_WORLD = WORLDS_DIR / "faults.yaml"
 
-#: Failure kinds the simulator can inject.
-FAILURE_KINDS = ("low_battery", "stuck_motor")
+#: Failure kinds the simulator can inject (the registry: `aeroexec.vehicles.faults`).
+FAILURE_KINDS = KIND_NAMES
 #: Visual marker ids are ArUco ids, as the catalog's UNTIL_OBSERVED_VISUAL_MARKER range says.
 MAX_MARKER_ID = 1023
 
@@ -63,12 +69,33 @@ class BatteryModel:
     idle_endurance: float = 7200.0  # s on the ground on a full charge
 
 
+def _value(failure: ScheduledFailure | RandomFailure, name: str) -> float:
+    """A failure's parameter in the simulator's units: as given, else the kind's default."""
+    given = getattr(failure, name)
+    if given is not None:
+        return float(given)
+    parameter = FAULT_KINDS[failure.kind].parameter(name)
+    return 0.0 if parameter is None else parameter.default * parameter.scale
+
+
 @dataclass(frozen=True, slots=True)
 class ScheduledFailure:
+    """A failure at `at` seconds: it strikes at the end of the first simulator step that
+    reaches that time. Parameters (aeroexec/vehicles/faults.py) in the simulator's units;
+    None: the kind's default."""
+
     kind: str
     at: float  # seconds of simulated time
     #: For `low_battery`: the charge the battery drops to (fraction).
     level: float = 0.10
+    #: For `lost_link`, `lost_position`, `wind_gust`: how long it lasts (s).
+    duration: float | None = None
+    #: For `wind_gust`: the wind's speed (m/s) and where it blows toward (degrees).
+    speed: float | None = None
+    direction: float | None = None
+
+    def value(self, name: str) -> float:
+        return _value(self, name)
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,6 +107,12 @@ class RandomFailure:
     rate: float
     seed: int | None = None
     level: float = 0.10
+    duration: float | None = None
+    speed: float | None = None
+    direction: float | None = None
+
+    def value(self, name: str) -> float:
+        return _value(self, name)
 
 
 @dataclass(frozen=True, slots=True)
@@ -176,10 +209,27 @@ class _Reader:
             )
         return kind
 
-    def level(self, node: YNode | None, what: str) -> float:
-        if node is None:
-            return 0.10
-        return self.number(node, what, minimum=0, maximum=100) / 100.0
+    def parameters(self, entry: dict[str, YNode], kind: str, what: str) -> dict[str, float]:
+        """The fault parameters of a failure entry, in the simulator's units; a parameter
+        of another kind is an error at its key."""
+        values: dict[str, float] = {}
+        for name in parameter_names():
+            if name not in entry:
+                continue
+            parameter = FAULT_KINDS[kind].parameter(name)
+            if parameter is None:
+                raise self.fail(
+                    f"{what}: '{name}' applies to {', '.join(kinds_with(name))} only",
+                    entry[name],
+                )
+            written = self.number(
+                entry[name],
+                f"{what}.{name} ({parameter.unit})",
+                minimum=parameter.minimum,
+                maximum=parameter.maximum,
+            )
+            values[name] = written * parameter.scale
+        return values
 
 
 def _kind(node: YNode) -> str:
@@ -340,18 +390,15 @@ def _failures(r: _Reader, node: YNode) -> tuple[ScheduledFailure, ...]:
         raise r.fail(f"failures must be a list, got {_kind(node)}", node)
     failures: list[ScheduledFailure] = []
     for item in node.value:
-        entry = r.mapping(item, "failure", ("kind", "at", "level"))
+        entry = r.mapping(item, "failure", ("kind", "at", *parameter_names()))
         for key in ("kind", "at"):
             if key not in entry:
                 raise r.fail(f"failure needs '{key}'", item)
         kind = r.kind(entry["kind"], "failure")
-        if "level" in entry and kind != "low_battery":
-            raise r.fail("failure: 'level' applies to low_battery only", entry["level"])
+        values = r.parameters(entry, kind, "failure")
         failures.append(
             ScheduledFailure(
-                kind,
-                r.number(entry["at"], "failure.at (seconds)", minimum=0),
-                r.level(entry.get("level"), "failure.level (percent)"),
+                kind, r.number(entry["at"], "failure.at (seconds)", minimum=0), **values
             )
         )
     # Stable by time then file order: two failures at the same time strike in file order.
@@ -359,19 +406,27 @@ def _failures(r: _Reader, node: YNode) -> tuple[ScheduledFailure, ...]:
 
 
 def _random_failure(r: _Reader, node: YNode) -> RandomFailure:
-    entry = r.mapping(node, "random_failure", ("kind", "rate", "seed", "level"))
+    entry = r.mapping(node, "random_failure", ("kind", "rate", "seed", *parameter_names()))
     for key in ("kind", "rate"):
         if key not in entry:
             raise r.fail(f"random_failure needs '{key}'", node)
     kind = r.kind(entry["kind"], "random_failure")
-    if "level" in entry and kind != "low_battery":
-        raise r.fail("random_failure: 'level' applies to low_battery only", entry["level"])
+    values = r.parameters(entry, kind, "random_failure")
     return RandomFailure(
         kind,
         r.number(entry["rate"], "random_failure.rate (per second)", minimum=0),
         r.integer(entry["seed"], "random_failure.seed", 0, 2**63 - 1) if "seed" in entry else None,
-        r.level(entry.get("level"), "random_failure.level (percent)"),
+        **values,
     )
+
+
+def with_failures(world: World, failures: tuple[ScheduledFailure, ...]) -> World:
+    """`world` with `failures` struck besides its own (in time order; at the same time,
+    the world's first)."""
+    if not failures:
+        return world
+    merged = sorted((*world.failures, *failures), key=lambda f: f.at)
+    return replace(world, failures=tuple(merged))
 
 
 def load_world(path: str | Path) -> World:

@@ -25,6 +25,7 @@ FAULT_KINDS = (
     "low_battery",
     "mode_changed",
     "not_connected",
+    "position_lost",
     "stuck_motor",
 )
 
@@ -51,9 +52,10 @@ UNKNOWN_FAULT = property_rule(
     "property-unknown-fault",
     Severity.WARNING,
     """A property names a fault no vehicle reports (`fault_K`; the kinds are
-    battery_empty, link_lost, low_battery, mode_changed, not_connected, stuck_motor). In
-    flight the signal is 0 throughout: a reaction to that fault is never checked. A
-    vehicle backend with faults of its own may report others. Fix the name otherwise.""",
+    battery_empty, link_lost, low_battery, mode_changed, not_connected, position_lost,
+    stuck_motor). In flight the signal is 0 throughout: a reaction to that fault is never
+    checked. A vehicle backend with faults of its own may report others. Fix the name
+    otherwise.""",
 )
 
 
