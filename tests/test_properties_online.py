@@ -43,8 +43,8 @@ properties:
 """
 
 
-def _run(tmp: Path, name: str, specs: list[str], world: Path | None = None):
-    monitor = PropertyMonitor(load_properties(specs))
+def _run(tmp: Path, name: str, specs: list[str], world: Path | None = None, every: float = 0.5):
+    monitor = PropertyMonitor(load_properties(specs), check_every_s=every)
     out = tmp / f"{name}.mcap"
     with contextlib.redirect_stdout(io.StringIO()):
         result = simulate(
@@ -97,6 +97,36 @@ def test_a_geofence_with_land_ends_the_flight_at_the_fence(tmp_path) -> None:
     offline = check_recording(recording, load_properties([str(spec), "aeroexec:safety"]))
     _same(monitor.verdicts, offline.verdicts)
     assert [v.name for v in offline.violated] == ["geofence"]
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        "command_GO_TO_POINT <= 0",  # judged tick by tick
+        "historically[0:0.2](command_GO_TO_POINT <= 0)",  # judged on arrays, every 0.5 s
+    ],
+)
+def test_a_command_is_judged_on_the_tick_it_is_issued(tmp_path, body) -> None:
+    # A mission command comes after its tick's vehicle state: a tick is judged when it is
+    # over, so the command's one-tick pulse is seen online where check sees it (judged
+    # every tick, as `fly` does, a tick judged at its vehicle state would miss it).
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(
+        f"properties:\n  - name: no_go_to\n    formula: always({body})\n    action: abort\n",
+        encoding="utf-8",
+    )
+    monitor, result, recording = _run(tmp_path, "commanded", [str(spec)], every=0.1)
+    commands = [
+        r
+        for r in open_recording(recording).records()
+        if getattr(r, "name", "") == "mission/command" and r.data["behavior"] == "GO_TO_POINT"
+    ]
+    issued_s = commands[0].log_time_ns / 1e9
+    assert monitor.stopped_at_s == pytest.approx(issued_s)
+    assert result.outcome.ending is Ending.STOPPED
+    [offline] = check_recording(recording, load_properties([str(spec)])).verdicts
+    assert offline.interval_s[0] == monitor.stopped_at_s
+    _same(monitor.verdicts, [offline])
 
 
 def test_rtl_returns_home_and_lands_hold_keeps_flying_abort_stops(tmp_path) -> None:

@@ -81,6 +81,13 @@ class Formula:
             return None
         return past, future
 
+    @cached_property
+    def instant_body(self) -> Callable[[semantics.Sample], float] | None:
+        """The body of a top-level `always` as a function of one sample's values, when it
+        reads only the present sample (`semantics.instant`); else None."""
+        body = self._always_body
+        return None if body is None else semantics.instant(body)
+
     def body_verdicts(self, columns: Mapping[str, Sequence[float]], length: int) -> np.ndarray:
         """The body of a top-level `always`, per sample: > 0 holds, < 0 violated."""
         body = self._always_body
