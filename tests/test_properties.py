@@ -109,6 +109,68 @@ def test_a_seized_motor_that_never_lands_is_caught_when_the_motor_seizes(recordi
     assert found["activations_answered"].status == HELD
 
 
+def _empty_battery_world(tmp: Path) -> Path:
+    """The default world, its battery empty at 8.0 s: the vehicle is forced to land."""
+    text = (ROOT / "aeroexec" / "data" / "worlds" / "default.yaml").read_text(encoding="utf-8")
+    assert "failures: []" in text
+    world = tmp / "empty_battery.yaml"
+    world.write_text(
+        text.replace("failures: []", "failures: [{kind: low_battery, at: 8.0, level: 0}]"),
+        encoding="utf-8",
+    )
+    return world
+
+
+def test_the_grounded_landing_bound_is_a_parameter_a_later_file_sets(tmp_path) -> None:
+    flight = record(tmp_path, "empty", APPENDIX_C, _empty_battery_world(tmp_path))
+    # Forced down from 1.5 m: grounded at 8.1 s, landed at 10.7 s, within the 30 s default.
+    assert verdicts(flight)["grounded_lands"].status == HELD
+    assert SAFETY.parameters[0].name == "land_within_s" and SAFETY.parameters[0].value == 30
+    quick = tmp_path / "quick.yaml"
+    quick.write_text("parameters:\n  land_within_s: 2.5\n", encoding="utf-8")
+    tight = load_properties(["aeroexec:safety", str(quick)])
+    grounded = verdicts(flight, tight)["grounded_lands"]
+    assert grounded.status == VIOLATED
+    assert grounded.interval_s[0] == 8.1  # the ticks whose 2.5 s window misses the landing
+    assert "landed within 2.5 s" in grounded.message()
+    explained = aeroexec(
+        "check", "--spec", "aeroexec:safety", "--spec", str(quick), "--explain", "grounded_lands"
+    )
+    assert f"land_within_s = 2.5 ({quick}:2)" in explained.stdout
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "words"),
+    [
+        ("parameters:\n  land_within: 60\n", "p.yaml:2:3", "parameter 'land_within' is read by no"),
+        ("parameters:\n  land_within_s: yes\n", "p.yaml:2:18", "must be a number"),
+        ("parameters:\n  altitude: 3\n", "p.yaml:2:3", "is a signal"),
+        ("parameters:\n  always: 3\n", "p.yaml:2:3", "a word of the formula language"),
+        # A value that does not fit where a formula reads it: where it is set.
+        ("parameters:\n  land_within_s: -1\n", "p.yaml:2:3", "= -1: a bound cannot be neg"),
+        ("parameters:\n  land_within_s: 0.05\n", "p.yaml:2:3", "multiple of the sampling"),
+    ],
+)
+def test_a_bad_parameter_is_one_error_at_its_place(tmp_path, text, where, words) -> None:
+    spec = tmp_path / "p.yaml"
+    spec.write_text(text, encoding="utf-8")
+    with pytest.raises(PropertyError) as caught:
+        load_properties_from(tmp_path, ["aeroexec:safety", "p.yaml"])
+    assert str(caught.value.mark).startswith(where)
+    assert words in caught.value.message
+
+
+def load_properties_from(directory: Path, specs: list[str]):
+    import os
+
+    cwd = os.getcwd()
+    os.chdir(directory)
+    try:
+        return load_properties(specs)
+    finally:
+        os.chdir(cwd)
+
+
 def test_a_mission_that_never_lands_breaks_ends_landed_at_its_end(recordings) -> None:
     found = verdicts(recordings["no_landing"])
     assert found["ends_landed_disarmed"].status == VIOLATED

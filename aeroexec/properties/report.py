@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
@@ -17,7 +17,7 @@ from xml.etree import ElementTree as ET
 from aeroexec import __version__
 from aeroexec.properties.check import MISSING, VIOLATED, CheckReport, Verdict
 from aeroexec.properties.signals import FAMILIES, SIGNALS
-from aeroexec.properties.spec import Property
+from aeroexec.properties.spec import Parameter, Property
 
 _LEVEL = {"error": "error", "warning": "warning", "note": "note"}
 _GITHUB = {"error": "error", "warning": "warning", "note": "notice"}
@@ -200,8 +200,9 @@ def junit(reports: Sequence[CheckReport], timestamp: str | None = None) -> str:
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, "unicode") + "\n"
 
 
-def explain(prop: Property) -> str:
-    """What `--explain PROPERTY` prints: the property and the signals it reads."""
+def explain(prop: Property, parameters: Iterable[Parameter] = ()) -> str:
+    """What `--explain PROPERTY` prints: the property, the signals it reads and the
+    parameters (of `parameters`, the set's) it reads."""
     lines = [
         f"{prop.name} ({prop.where})",
         f"  formula:  {prop.formula.text}",
@@ -217,6 +218,12 @@ def explain(prop: Property) -> str:
     lines.append("  signals:")
     for name in prop.formula.signals:
         lines.append(f"    {name}: {describe_signal(name)}")
+    given = {p.name: p for p in parameters}
+    if prop.formula.parameters:
+        lines.append("  parameters:")
+        for name in prop.formula.parameters:
+            if name in given:
+                lines.append(f"    {name} = {given[name].text} ({given[name].where})")
     return "\n".join(lines) + "\n"
 
 
