@@ -425,11 +425,51 @@ def test_replay_check_passes_only_if_the_properties_hold(recordings, tmp_path) -
     assert "ceiling" in failure.get("message", "") or failure.text
     without_check = aeroexec("replay", rec, "--spec", str(spec))
     assert without_check.returncode == 0  # reported, but --check decides the exit code
-    sharded = aeroexec("replay", rec, "--spec", str(spec), "--shard", "1/1", "-f", "json")
-    assert sharded.returncode == 2 and "--spec with --shard" in sharded.stderr
     kept = tmp_path / "again.mcap"
     written = aeroexec("replay", rec, "--spec", str(spec), "-o", str(kept))
     assert f"{kept}: t=4.00s: error ceiling" in written.stdout
+
+
+def test_replay_spec_in_worker_processes_and_shards_gives_the_same_verdicts(
+    recordings, tmp_path
+) -> None:
+    # Each replay is checked where it runs (a worker process, a Ray node) and its verdicts
+    # travel with its result: --jobs 2 says what --jobs 1 says, and a shard's JSON report
+    # carries its own replays' verdicts, which `report merge` puts back together.
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(SPEC, encoding="utf-8")
+    recs = [str(recordings["appendix_c"]), str(recordings["patrol"])]
+    args = ["replay", *recs, "--spec", "aeroexec:safety", "--spec", str(spec), "--check"]
+    alone = aeroexec(*args, "--jobs", "1")
+    assert alone.returncode == 1  # appendix_c's replay climbs above 1.4 m
+    assert f"{recs[0]} (replay): t=4.00s: error ceiling:" in alone.stdout
+    assert f"{recs[1]} (replay): t=" in alone.stdout  # the patrol flies at 1.5 m too
+    assert "2 recording(s), 12 check(s): 2 violated" in alone.stdout
+    pooled = aeroexec(*args, "--jobs", "2")
+    assert (pooled.returncode, pooled.stdout) == (alone.returncode, alone.stdout)
+    whole = aeroexec(*args, "-f", "json")
+    shards = []
+    for k in (1, 2):
+        done = aeroexec(*args, "--shard", f"{k}/2", "-f", "json")
+        shard = json.loads(done.stdout)
+        # A shard reports its own replays' verdicts, and fails --check on its own.
+        names = [r["recording"] for r in shard["properties"]["recordings"]]
+        assert names == [f"{r['recording']} (replay)" for r in shard["recordings"]]
+        assert done.returncode == (1 if names else 0), done.stderr
+        shards.append(tmp_path / f"shard-{k}.json")
+        shards[-1].write_text(done.stdout, encoding="utf-8")
+    merged = aeroexec("report", "merge", *map(str, shards), "--check", "-f", "json")
+    assert (merged.returncode, json.loads(merged.stdout)) == (1, json.loads(whole.stdout))
+    text = aeroexec("report", "merge", *map(str, shards), "--check")
+    assert (text.returncode, text.stdout) == (alone.returncode, alone.stdout)
+    junit = ET.fromstring(aeroexec("report", "merge", *map(str, shards), "-f", "junit").stdout)
+    suites = [s.get("name") for s in junit.iter("testsuite")]
+    assert f"properties: {recs[0]} (replay)" in suites
+    # Shards of another property set are not one run.
+    other = aeroexec("replay", *recs, "--spec", "aeroexec:safety", "--shard", "2/2", "-f", "json")
+    shards[1].write_text(other.stdout, encoding="utf-8")
+    refused = aeroexec("report", "merge", *map(str, shards))
+    assert refused.returncode == 2 and "settings" in refused.stderr
 
 
 def test_run_spec_reports_and_fails_on_a_violation(tmp_path) -> None:

@@ -6,7 +6,6 @@ import contextlib
 import dataclasses
 import os
 import sys
-import tempfile
 import time
 from enum import Enum
 from pathlib import Path
@@ -38,8 +37,8 @@ from aeroexec.cli.project import (
 )
 from aeroexec.cli.spec import (
     SpecOption,
-    check_recording,
     load_spec,
+    verdicts_failed,
     verdicts_text,
     with_verdicts_json,
     with_verdicts_junit,
@@ -276,44 +275,29 @@ def replay(
     discovered_behaviors(sources)  # so are bad behaviors (and the replays reuse what was found)
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
-    if spec and shard is not None:
-        # `report merge` does not carry the shards' property verdicts yet: a merged
-        # --check would pass a violation.
-        raise AeroexecError(
-            "--spec with --shard is not supported yet (report merge drops the verdicts)"
-        )
     properties = load_spec(spec)  # so is a bad property file
-    with contextlib.ExitStack() as scratch:
-        kept = True
-        if properties is not None and output is None and out_dir is None:
-            if executor.startswith("ray://"):
-                raise AeroexecError("--spec checks each replay's recording: not on a cluster")
-            # The properties are checked on each replay's recording: write them somewhere.
-            out_dir = scratch.enter_context(tempfile.TemporaryDirectory(prefix="aeroexec-"))
-            kept = False
-        _replay(
-            _Run(
-                recordings=recordings,
-                catalog=catalog,
-                mode=mode,
-                output=output,
-                out_dir=out_dir,
-                check=check,
-                jobs=jobs,
-                sources=sources,
-                shard=shard,
-                executor=executor,
-                output_format=output_format,
-                tolerance=tolerance,
-                position_tolerance=position_tolerance,
-                mission=mission,
-                trust_recording=trust_recording,
-                timing=timing,
-                started=started,
-                properties=properties,
-                kept=kept,
-            )
+    _replay(
+        _Run(
+            recordings=recordings,
+            catalog=catalog,
+            mode=mode,
+            output=output,
+            out_dir=out_dir,
+            check=check,
+            jobs=jobs,
+            sources=sources,
+            shard=shard,
+            executor=executor,
+            output_format=output_format,
+            tolerance=tolerance,
+            position_tolerance=position_tolerance,
+            mission=mission,
+            trust_recording=trust_recording,
+            timing=timing,
+            started=started,
+            properties=properties,
         )
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -338,8 +322,6 @@ class _Run:
     timing: Any
     started: float
     properties: PropertySet | None
-    #: The outputs are the user's (else a scratch directory for --spec, not reported).
-    kept: bool
 
 
 def _replay(run: _Run) -> None:
@@ -366,7 +348,7 @@ def _replay(run: _Run) -> None:
         run.timing,
         run.started,
     )
-    properties, kept = run.properties, run.kept
+    properties = run.properties
     options = ReplayOptions(
         catalog=str(catalog) if catalog is not None else None,
         mode=mode,
@@ -375,6 +357,8 @@ def _replay(run: _Run) -> None:
         behaviors=sources,
         mission=str(mission) if mission is not None else None,
         trust_recording=trust_recording,
+        # Checked where each replay runs (a scratch file there when it has no output).
+        properties=properties.documents if properties is not None else (),
     )
     inputs = expand_inputs(recordings)
     part = None
@@ -419,16 +403,7 @@ def _replay(run: _Run) -> None:
     again = retried(results)
     if again:
         error_line(f"note: retried after a worker failure: {', '.join(again)}")
-    checked = []
-    if properties is not None:
-        for result in results:
-            if result.output is not None:
-                report = check_recording(result.output, properties)
-                # Named after what the user gave: the replay of that recording.
-                name = result.output if kept else f"{result.recording} (replay)"
-                checked.append(dataclasses.replace(report, recording=name))
-        if not kept:  # a scratch directory's files are gone when this returns
-            results = [dataclasses.replace(r, output=None) for r in results]
+    checked = [r.properties for r in results if r.properties is not None]
     if output_format is OutputFormat.json:
         document = replay_json(results) if part is None else shard_json(results, part)
         typer.echo(with_verdicts_json(document, checked) if properties is not None else document)
@@ -443,6 +418,5 @@ def _replay(run: _Run) -> None:
             typer.echo(verdicts_text(checked), nl=False)
     if any(r.error is not None for r in results):
         raise typer.Exit(2)
-    violated = any(report.failed for report in checked)
-    if check and (violated or not all(r.equal for r in results)):
+    if check and (verdicts_failed(checked) or not all(r.equal for r in results)):
         raise typer.Exit(1)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,6 +83,9 @@ class PropertySet:
     sources: tuple[str, ...]
     #: The parameters the formulas read, with the values they were given.
     parameters: tuple[Parameter, ...] = ()
+    #: Each file's name and text, as read: what another process (a replay's worker, on
+    #: this machine or a cluster's) loads the same set from (`load_property_documents`).
+    documents: tuple[tuple[str, str], ...] = ()
 
     def find(self, name: str) -> Property | None:
         return next((p for p in self.properties if p.name == name), None)
@@ -105,7 +109,15 @@ def load_properties(specs: list[str] | tuple[str, ...], *, alone: bool = False) 
     in order, with the parameters the files set (a later file's value wins); a name
     defined twice is an error at its second place. `alone`: a file checked by itself
     (`verify`), whose parameters may be read by files given with it."""
-    documents = [_read(spec) for spec in specs]
+    return load_property_documents([(spec, _read(spec)) for spec in specs], alone=alone)
+
+
+def load_property_documents(
+    texts: Sequence[tuple[str, str]], *, alone: bool = False
+) -> PropertySet:
+    """`load_properties` of files already read: (name, text) of each, in order."""
+    specs = [name for name, _ in texts]
+    documents = [_document(text, name) for name, text in texts]
     parameters: dict[str, Parameter] = {}
     for document in documents:
         for parameter in _parameters(document):
@@ -131,17 +143,17 @@ def load_properties(specs: list[str] | tuple[str, ...], *, alone: bool = False) 
                 parameter.mark,
             )
     used = tuple(p for name, p in parameters.items() if name in read)
-    return PropertySet(tuple(properties), tuple(specs), used)
+    return PropertySet(tuple(properties), tuple(specs), used, tuple(texts))
 
 
-def _read(spec: str) -> _Document:
+def _read(spec: str) -> str:
     if spec.startswith(BUILTIN_PREFIX):
         path = BUILTINS.get(spec)
         if path is None:
             known = ", ".join(sorted(BUILTINS))
             raise PropertyError(f"no built-in property set '{spec}' (there is {known})")
-        return _document(path.read_text(encoding="utf-8"), spec)
-    return _document(read_text(spec, "a property file", PropertyError), spec)
+        return path.read_text(encoding="utf-8")
+    return read_text(spec, "a property file", PropertyError)
 
 
 def parse_properties(text: str, file: str) -> list[Property]:

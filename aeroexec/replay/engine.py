@@ -61,6 +61,10 @@ class ReplayOptions:
     #: Closed loop without `mission`: run the script stored in the recording (code from
     #: a file the user may have received from anyone: never by default).
     trust_recording: bool = False
+    #: Check each replay's recording against these properties (`--spec`): the name and
+    #: text of each property file (`PropertySet.documents`), so that a worker anywhere
+    #: loads the same set; the verdicts come back on `ReplayResult.properties`.
+    properties: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,6 +82,9 @@ class ReplayResult:
     notes: tuple[str, ...] = ()
     #: Behaviors whose code is not the code the recording ran (class or source changed).
     code_changes: tuple[str, ...] = ()
+    #: With `ReplayOptions.properties`: the replay's verdicts, in their JSON form
+    #: (`aeroexec.properties.report.recording_json`); None when not checked.
+    properties: dict[str, Any] | None = None
     #: Wall-clock seconds the replay took (JUnit's `time`); not part of the result's
     #: value: equal results compare equal however long they took.
     seconds: float | None = field(default=None, compare=False)
@@ -100,7 +107,7 @@ class ReplayResult:
             "code_changes": list(self.code_changes),
             "notes": list(self.notes),
             "mission": self.diff.mission or None if self.diff else None,
-        }
+        } | ({"properties": self.properties} if self.properties is not None else {})
 
 
 def choose_mode(run: RecordedRun, requested: Mode | None) -> Mode:
