@@ -97,6 +97,28 @@ def test_safety_holds_on_the_thesis_mission_and_a_patrol(recordings, name) -> No
     }
 
 
+def test_safety_holds_on_a_one_hour_patrol(tmp_path) -> None:
+    # The long patrol of benchmarks/properties.py: 65 laps of four waypoints and a 40 s
+    # hover, on a battery that lasts (the default's lasts 20 minutes in the air).
+    text = (ROOT / "aeroexec" / "data" / "worlds" / "default.yaml").read_text(encoding="utf-8")
+    world = tmp_path / "endurance.yaml"
+    world.write_text(
+        text.replace("flight_endurance: 1200", "flight_endurance: 36000"), encoding="utf-8"
+    )
+    long_patrol = PATROL.replace("range(3)", "range(65)")
+    report = check_recording(record(tmp_path, "hour", long_patrol, world), SAFETY)
+    assert report.duration_s > 3500  # 35,676 ticks
+    assert {v.name: v.status for v in report.verdicts} == dict.fromkeys(
+        (
+            "compatible_capabilities",
+            "activations_answered",
+            "ends_landed_disarmed",
+            "grounded_lands",
+        ),
+        HELD,
+    )
+
+
 def test_a_seized_motor_that_never_lands_is_caught_when_the_motor_seizes(recordings) -> None:
     found = verdicts(recordings["faults"])
     grounded = found["grounded_lands"]
@@ -123,7 +145,7 @@ def _empty_battery_world(tmp: Path) -> Path:
 
 def test_the_grounded_landing_bound_is_a_parameter_a_later_file_sets(tmp_path) -> None:
     flight = record(tmp_path, "empty", APPENDIX_C, _empty_battery_world(tmp_path))
-    # Forced down from 1.5 m: grounded at 8.1 s, landed at 10.7 s, within the 30 s default.
+    # Forced down from 1.3 m: grounded at 8.1 s, landed at 10.9 s, within the 30 s default.
     assert verdicts(flight)["grounded_lands"].status == HELD
     assert SAFETY.parameters[0].name == "land_within_s" and SAFETY.parameters[0].value == 30
     quick = tmp_path / "quick.yaml"
@@ -131,7 +153,8 @@ def test_the_grounded_landing_bound_is_a_parameter_a_later_file_sets(tmp_path) -
     tight = load_properties(["aeroexec:safety", str(quick)])
     grounded = verdicts(flight, tight)["grounded_lands"]
     assert grounded.status == VIOLATED
-    assert grounded.interval_s[0] == 8.1  # the ticks whose 2.5 s window misses the landing
+    # The ticks whose 2.5 s window ends before the landing at 10.9 s: 8.1 s to 8.3 s.
+    assert grounded.interval_s == (8.1, 8.3)
     assert "landed within 2.5 s" in grounded.message()
     explained = aeroexec(
         "check", "--spec", "aeroexec:safety", "--spec", str(quick), "--explain", "grounded_lands"
