@@ -86,6 +86,8 @@ class PropertyMonitor:
         self.builder.use_catalog(executive.catalog.conflicts_of)
 
     def session_ending(self, executive: Executive) -> None:
+        # The verdicts below are recorded now: `check` counts their tick in the session.
+        self.builder.mark_time(executive.clock.now_ns())
         self.verdicts = evaluate(self.properties, self.builder.finish())
         for verdict in self.verdicts:
             if verdict.status == VIOLATED and verdict.name not in self.early:

@@ -254,6 +254,7 @@ class SignalBuilder:
         self._faults: set[str] = set()
         #: The last row `latest` found to be numbers (each row is checked once).
         self._checked_row: tuple[Any, ...] | None = None
+        self._home_numeric: bool | None = None
 
     # -- input ------------------------------------------------------------------------------
     def use_catalog(self, conflicts: Callable[[str], Iterable[str]]) -> None:
@@ -395,9 +396,9 @@ class SignalBuilder:
         before the first state, a state that is no row of numbers)."""
         values: dict[str, float] = {}
         row: tuple[Any, ...] | None = None
+        if self._defaulted and any(self._guessed(name) for name in names):
+            return None
         for name in names:
-            if self._defaulted and self._guessed(name):
-                return None
             if name in _IN_ROWS:
                 if row is None:
                     row = self._numeric_last_row()
@@ -420,11 +421,14 @@ class SignalBuilder:
     def _numeric_last_row(self) -> tuple[Any, ...] | None:
         """The last state row, when it and the first (home) are rows of numbers (a row
         that is not is dropped offline: its tick holds an earlier one); else None."""
-        if not self._rows:
+        rows = self._rows
+        if not rows:
             return None
-        row = self._rows[-1]
+        row = rows[-1]
         if row is not self._checked_row:
-            if not (_numeric(row) and _numeric(self._rows[0])):
+            if self._home_numeric is None:  # the first row never changes: checked once
+                self._home_numeric = _numeric(rows[0])
+            if not (self._home_numeric and _numeric(row)):
                 return None
             self._checked_row = row
         return row
