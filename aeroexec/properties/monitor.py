@@ -46,6 +46,11 @@ TOPIC = PROPERTIES_TOPIC
 
 
 class PropertyMonitor:
+    #: The bus topics and services signals come from (`Bus` calls it for no other): the
+    #: session's other messages change no signal, and its last tick, which every message
+    #: extends, holds a vehicle state or is the time the session ends at.
+    reads = TOPICS | SERVICES
+
     def __init__(self, properties: PropertySet, *, check_every_s: float = CHECK_EVERY_S) -> None:
         self.properties = properties
         self.builder = SignalBuilder(None)
@@ -102,7 +107,7 @@ class PropertyMonitor:
             self._ticks_over(t_ns)
         if record.service in SERVICES:
             self.builder.call(record.service, t_ns, record.request, record.response)
-        else:
+        else:  # a bus that calls it for every message
             self.builder.mark_time(t_ns)
 
     def on_topic(self, record: TopicRecord) -> None:
@@ -114,7 +119,7 @@ class PropertyMonitor:
             self._ticks_over(t_ns)
         if topic in TOPICS:
             self.builder.topic(topic, t_ns, record.data)
-        else:
+        else:  # a bus that calls it for every message
             self.builder.mark_time(t_ns)
 
     # -- internals ------------------------------------------------------------------------
@@ -126,7 +131,6 @@ class PropertyMonitor:
         first, done, self._open = self._open, tick - 1, tick
         if done < 0 or self.stopped_by is not None:
             return
-        self.builder.mark_time(done * PERIOD_NS)  # the ticks without messages exist too
         if self._instant:
             for over in range(max(first, 0), done + 1):
                 if self._judge_instant(over):

@@ -276,6 +276,10 @@ def _instant_pair(
     op = node.op
     if isinstance(node, nodes.Compare):
         test = _TESTS[op]
+        # A signal against a number, the common case (a geofence): one call, not three.
+        if isinstance(node.left, nodes.Signal) and isinstance(node.right, nodes.Constant):
+            name, bound = node.left.name, float(node.right.value)
+            return lambda values: 1.0 if test(values[name], bound) else -1.0
         return lambda values: 1.0 if test(left(values), right(values)) else -1.0
     if isinstance(node, nodes.Arithmetic):
         if op == "pow":

@@ -144,14 +144,15 @@ def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np
 
 def _row_value(name: str, row: tuple[Any, ...], first: tuple[Any, ...]) -> float:
     """`_vehicle_column` at one row, on Python floats (the same values, float for float)."""
+    column = _COLUMN_OF.get(name)
+    if column is not None:
+        return float(row[column])
     if name == "distance_home":
         dx, dy = float(row[1]) - float(first[1]), float(row[2]) - float(first[2])
         return math.sqrt(dx * dx + dy * dy)
     if name == "speed":
         return math.sqrt(float(row[4]))
-    if name == "landed":
-        return 1.0 - float(row[6])
-    return float(row[_COLUMN_OF[name]])
+    return 1.0 - float(row[6])  # landed
 
 
 _COLUMN_OF = {"altitude": 3, "battery": 5, "flying": 6, "armed": 7}
@@ -398,6 +399,7 @@ class SignalBuilder:
         row: tuple[Any, ...] | None = None
         if self._defaulted and any(self._guessed(name) for name in names):
             return None
+        current = self._current
         for name in names:
             if name in _IN_ROWS:
                 if row is None:
@@ -405,8 +407,8 @@ class SignalBuilder:
                     if row is None:
                         return None
                 values[name] = _row_value(name, row, self._rows[0])
-            elif name in self._current:
-                values[name] = self._current[name]
+            elif name in current:
+                values[name] = current[name]
             elif name in self._pulses:
                 values[name] = 1.0 if self._pulses[name][-1] == k else 0.0
             elif name == "end" or any(
