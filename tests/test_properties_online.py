@@ -260,3 +260,30 @@ def test_the_foxglove_layout_shows_properties_beside_behavior_events() -> None:
     values = [path["value"] for path in panel["paths"]]
     assert "/drone1/properties.property" in values
     assert "/drone1/properties.status" in values
+
+
+def test_the_bus_calls_the_monitor_only_for_what_its_signals_come_from(tmp_path) -> None:
+    # `reads`: a session publishes some 25 topics and services (beliefs, process states,
+    # the specialist's calls...); signals come from 7, and the others are not delivered.
+    from aeroexec.executive.bus import MemoryObserver
+
+    class Seen(PropertyMonitor, MemoryObserver):
+        def __init__(self) -> None:
+            PropertyMonitor.__init__(self, load_properties(["aeroexec:safety"]))
+            MemoryObserver.__init__(self)
+
+        def on_topic(self, record) -> None:
+            MemoryObserver.on_topic(self, record)
+            PropertyMonitor.on_topic(self, record)
+
+        def on_service_call(self, record) -> None:
+            MemoryObserver.on_service_call(self, record)
+            PropertyMonitor.on_service_call(self, record)
+
+    seen, everything = Seen(), MemoryObserver()
+    with contextlib.redirect_stdout(io.StringIO()):
+        simulate(SessionConfig(mission=APPENDIX_C), observers=[seen, everything])
+    names = {getattr(r, "topic", None) or r.service for r in seen.records}
+    assert names == set(PropertyMonitor.reads)  # all 7, and no other
+    assert len(everything.records) > 3 * len(seen.records)
+    assert {getattr(r, "topic", None) or r.service for r in everything.records} > names
