@@ -218,8 +218,11 @@ def test_fly_spec_lands_at_the_geofence_and_the_verdicts_match_check(tmp_path) -
     assert result.ending is not None and result.ending.down
     assert any(a.startswith("switched to LAND") for a in result.ending.actions)
     assert final["mode"] == "LAND" and not final["armed"]
-    # It landed at the fence, not at the mission's target 12 m away.
-    assert 4.0 < math.hypot(*final["position"][:2]) < 6.0
+    # It landed at the fence, not at the mission's target 12 m away: past it by what it
+    # flies from the crossing to the stop (a tick is judged once over, at the next one's
+    # vehicle state, and the stop comes at the step after: two ticks, 0.2 s of wall time
+    # and 0.4 s of MavSim's, which runs at twice its speed), then its braking.
+    assert 4.0 < math.hypot(*final["position"][:2]) < 7.0
     published = [
         r.data for r in open_recording(out).records() if getattr(r, "name", "") == "properties"
     ]
