@@ -37,10 +37,12 @@ from figures import Figure, interleaved, timed
 from replay import long_endurance_world, record_patrol
 
 from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.properties.spec import load_properties
 from aeroexec.recording import open_recording
-from aeroexec.replay.engine import ReplayOptions, replay_recording
+from aeroexec.replay.engine import ReplayOptions, ReplayResult, replay_recording
 from aeroexec.replay.executors import InlineExecutor, ProcessExecutor
 from aeroexec.replay.inject import Injection, parse_injection
+from aeroexec.replay.tasks import ReplayTask, run_task
 from aeroexec.vehicles.faults import KIND_NAMES, FaultSpec
 from aeroexec.whatif import ExploreOptions, explore
 
@@ -50,7 +52,7 @@ DEFECT = ROOT / "tests" / "fixtures" / "whatif" / "land_conflict.yaml"
 EXPLORE_TARGET_S = 60.0
 SPEED_TARGET = 500.0
 MEMORY_RATIO_TARGET = 1.10
-SAFETY = ("aeroexec:safety",)
+SAFETY = load_properties(["aeroexec:safety"]).documents
 
 
 def wall(action: object) -> float:
@@ -69,7 +71,12 @@ def explore_wall(recording: Path, out: Path) -> tuple[float, int]:
 
 def plain_run(recording: Path, out: Path) -> None:
     """One run's floor: the recording replayed, recorded and checked, nothing injected."""
-    replay_recording(recording, ReplayOptions(trust_recording=True, output=str(out), spec=SAFETY))
+    checked(recording, ReplayOptions(trust_recording=True, output=str(out), properties=SAFETY))
+
+
+def checked(recording: Path, options: ReplayOptions) -> ReplayResult:
+    """A replay checked against its properties, as replay's executors run one."""
+    return run_task(ReplayTask(0, str(recording), str(recording), options))
 
 
 def duration_s(path: Path) -> float:
@@ -192,10 +199,10 @@ def main() -> int:
                 trust_recording=True,
                 injections=(Injection(FaultSpec(run.run.fault), run.run.when),),
                 output=str(directory / "again.mcap"),
-                spec=SAFETY,
+                properties=SAFETY,
             )
             for _ in range(max(1, args.reproduce)):
-                again = replay_recording(recording, options)
+                again = checked(recording, options)
                 total += 1
                 data = (directory / "again.mcap").read_bytes()
                 same += data == original and again.violated == run.violated

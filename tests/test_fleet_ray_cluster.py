@@ -17,6 +17,7 @@ when Ray is not installed.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import re
 import shlex
@@ -223,6 +224,12 @@ def test_the_pages_two_node_cluster_gives_the_verdict_of_jobs_1(
     local = aeroexec([*corpus_args, "--jobs", "1"], cluster.env)
     assert on_ray.stdout == local.stdout and on_ray.returncode == local.returncode == 2
     assert "Traceback" not in on_ray.stderr
+    # With --spec, each replay is checked on the node that replayed it.
+    checked = [*corpus_args, "--spec", "aeroexec:safety"]
+    on_ray = aeroexec([*checked, "--executor", cluster.address], cluster.env)
+    local = aeroexec([*checked, "--jobs", "1"], cluster.env)
+    assert on_ray.stdout == local.stdout and on_ray.returncode == local.returncode == 2
+    assert json.loads(on_ray.stdout)["properties"]["recordings"]
 
 
 @pytest.mark.parametrize(

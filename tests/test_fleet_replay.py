@@ -150,6 +150,19 @@ def test_ray_gives_the_same_report(corpus: Corpus, reference: tuple, local_ray: 
     assert replay(corpus, "--format", "json", "--executor", "ray") == reference
 
 
+def test_ray_checks_properties_where_each_replay_runs(corpus: Corpus, local_ray: None) -> None:
+    # --spec: each replay's recording is checked on the Ray worker that wrote it (a
+    # scratch file there), and the verdicts come back with its result.
+    spec = ["--spec", "aeroexec:safety", "--format", "json"]
+    here = replay(corpus, *spec, "--jobs", "1")
+    assert replay(corpus, *spec, "--executor", "ray") == here
+    document = json.loads(here[1])
+    checked = document["properties"]["recordings"]
+    replayed = [r["recording"] for r in document["recordings"] if r["error"] is None]
+    assert [c["recording"] for c in checked] == [f"{name} (replay)" for name in replayed]
+    assert all(len(c["verdicts"]) == 4 for c in checked)
+
+
 # -- shards ---------------------------------------------------------------------------------
 def test_a_recording_stays_in_its_shard_when_recordings_are_added(corpus: Corpus) -> None:
     names = list(corpus.files)

@@ -24,9 +24,13 @@ from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.executive.bus import MemoryObserver
+from aeroexec.executive.messages import TopicRecord
 from aeroexec.mavlink.sim_peer import MavSim, MavSimConfig
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.mission.paths import APPENDIX_C
+from aeroexec.properties.check import SERVICES, TOPICS, VIOLATED, evaluate
+from aeroexec.properties.signals import PERIOD_NS, SignalBuilder
+from aeroexec.properties.spec import parse_properties
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
@@ -241,6 +245,7 @@ def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
     seen = next(e for e in memory.topics("mavlink/link") if e["event"] == "failsafe_seen")
     assert seen["mode"] == "LAND" and 0.0 < seen["after_s"] < 2.0
     assert memory.topics("mavlink/link")[3]["action"] == "land"
+    _the_link_signal_follows_the_link(memory)
     # The vehicle ended down, but the flight lost its link: not a safe flight.
     assert result.ending is not None and result.ending.down
     assert result.link_losses == 1 and not result.safe
@@ -252,6 +257,36 @@ def test_link_loss_mid_go_to_point_fails_it_and_the_failsafe_lands(
     assert [c["result"] for c in modes] == ["ACCEPTED", "ACCEPTED"]  # GUIDED, then LAND
     assert stats["final"]["mode"] == "LAND" and not stats["final"]["flying"]
     assert stats["final"]["position"][1] < 39.0
+
+
+def _the_link_signal_follows_the_link(memory: MemoryObserver) -> None:
+    """The properties' `link` signal (docs/properties.md) on the flight's messages: 0
+    from the tick the link is called lost to the tick it is restored, and
+    `fault_link_lost` from the loss on."""
+    builder = SignalBuilder(None)
+    when: dict[str, int] = {}
+    for record in memory.records:
+        if isinstance(record, TopicRecord):
+            if record.topic == "mavlink/link":
+                when.setdefault(record.data["event"], record.log_time_ns)
+            if record.topic in TOPICS:
+                builder.topic(record.topic, record.log_time_ns, record.data)
+        elif record.service in SERVICES:
+            builder.call(record.service, record.log_time_ns, record.request, record.response)
+    props = parse_properties(
+        "properties:\n"
+        "  - {name: link_up, formula: 'always(link >= 1)'}\n"
+        "  - {name: never_lost, formula: 'always(fault_link_lost <= 0)'}\n",
+        "link.yaml",
+    )
+    link_up, never_lost = evaluate(props, builder.finish())
+    assert link_up.status == never_lost.status == VIOLATED
+    lost, restored = when["lost"] // PERIOD_NS, when["restored"] // PERIOD_NS
+    # The vehicle state that says so is the next one published: within a tick.
+    start, end = (round(t / (PERIOD_NS / 1e9)) for t in link_up.interval_s)
+    assert lost <= start <= lost + 1 and restored - 1 <= end <= restored + 1
+    assert never_lost.interval_s[0] == link_up.interval_s[0]
+    assert never_lost.interval_s[1] > link_up.interval_s[1]  # seen, from then on
 
 
 def test_a_failsafe_hold_is_reported_only_once_the_autopilot_shows_it_still(

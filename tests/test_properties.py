@@ -97,6 +97,28 @@ def test_safety_holds_on_the_thesis_mission_and_a_patrol(recordings, name) -> No
     }
 
 
+def test_safety_holds_on_a_one_hour_patrol(tmp_path) -> None:
+    # The long patrol of benchmarks/properties.py: 65 laps of four waypoints and a 40 s
+    # hover, on a battery that lasts (the default's lasts 20 minutes in the air).
+    text = (ROOT / "aeroexec" / "data" / "worlds" / "default.yaml").read_text(encoding="utf-8")
+    world = tmp_path / "endurance.yaml"
+    world.write_text(
+        text.replace("flight_endurance: 1200", "flight_endurance: 36000"), encoding="utf-8"
+    )
+    long_patrol = PATROL.replace("range(3)", "range(65)")
+    report = check_recording(record(tmp_path, "hour", long_patrol, world), SAFETY)
+    assert report.duration_s > 3500  # 35,676 ticks
+    assert {v.name: v.status for v in report.verdicts} == dict.fromkeys(
+        (
+            "compatible_capabilities",
+            "activations_answered",
+            "ends_landed_disarmed",
+            "grounded_lands",
+        ),
+        HELD,
+    )
+
+
 def test_a_seized_motor_that_never_lands_is_caught_when_the_motor_seizes(recordings) -> None:
     found = verdicts(recordings["faults"])
     grounded = found["grounded_lands"]
@@ -107,6 +129,69 @@ def test_a_seized_motor_that_never_lands_is_caught_when_the_motor_seizes(recordi
     assert found["ends_landed_disarmed"].interval_s[0] == pytest.approx(13.0)
     # Every activation was answered, even those whose start failed inside the call.
     assert found["activations_answered"].status == HELD
+
+
+def _empty_battery_world(tmp: Path) -> Path:
+    """The default world, its battery empty at 8.0 s: the vehicle is forced to land."""
+    text = (ROOT / "aeroexec" / "data" / "worlds" / "default.yaml").read_text(encoding="utf-8")
+    assert "failures: []" in text
+    world = tmp / "empty_battery.yaml"
+    world.write_text(
+        text.replace("failures: []", "failures: [{kind: low_battery, at: 8.0, level: 0}]"),
+        encoding="utf-8",
+    )
+    return world
+
+
+def test_the_grounded_landing_bound_is_a_parameter_a_later_file_sets(tmp_path) -> None:
+    flight = record(tmp_path, "empty", APPENDIX_C, _empty_battery_world(tmp_path))
+    # Forced down from 1.3 m: grounded at 8.1 s, landed at 10.9 s, within the 30 s default.
+    assert verdicts(flight)["grounded_lands"].status == HELD
+    assert SAFETY.parameters[0].name == "land_within_s" and SAFETY.parameters[0].value == 30
+    quick = tmp_path / "quick.yaml"
+    quick.write_text("parameters:\n  land_within_s: 2.5\n", encoding="utf-8")
+    tight = load_properties(["aeroexec:safety", str(quick)])
+    grounded = verdicts(flight, tight)["grounded_lands"]
+    assert grounded.status == VIOLATED
+    # The ticks whose 2.5 s window ends before the landing at 10.9 s: 8.1 s to 8.3 s.
+    assert grounded.interval_s == (8.1, 8.3)
+    assert "landed within 2.5 s" in grounded.message()
+    explained = aeroexec(
+        "check", "--spec", "aeroexec:safety", "--spec", str(quick), "--explain", "grounded_lands"
+    )
+    assert f"land_within_s = 2.5 ({quick}:2)" in explained.stdout
+
+
+@pytest.mark.parametrize(
+    ("text", "where", "words"),
+    [
+        ("parameters:\n  land_within: 60\n", "p.yaml:2:3", "parameter 'land_within' is read by no"),
+        ("parameters:\n  land_within_s: yes\n", "p.yaml:2:18", "must be a number"),
+        ("parameters:\n  altitude: 3\n", "p.yaml:2:3", "is a signal"),
+        ("parameters:\n  always: 3\n", "p.yaml:2:3", "a word of the formula language"),
+        # A value that does not fit where a formula reads it: where it is set.
+        ("parameters:\n  land_within_s: -1\n", "p.yaml:2:3", "= -1: a bound cannot be neg"),
+        ("parameters:\n  land_within_s: 0.05\n", "p.yaml:2:3", "multiple of the sampling"),
+    ],
+)
+def test_a_bad_parameter_is_one_error_at_its_place(tmp_path, text, where, words) -> None:
+    spec = tmp_path / "p.yaml"
+    spec.write_text(text, encoding="utf-8")
+    with pytest.raises(PropertyError) as caught:
+        load_properties_from(tmp_path, ["aeroexec:safety", "p.yaml"])
+    assert str(caught.value.mark).startswith(where)
+    assert words in caught.value.message
+
+
+def load_properties_from(directory: Path, specs: list[str]):
+    import os
+
+    cwd = os.getcwd()
+    os.chdir(directory)
+    try:
+        return load_properties(specs)
+    finally:
+        os.chdir(cwd)
 
 
 def test_a_mission_that_never_lands_breaks_ends_landed_at_its_end(recordings) -> None:
@@ -363,11 +448,51 @@ def test_replay_check_passes_only_if_the_properties_hold(recordings, tmp_path) -
     assert "ceiling" in failure.get("message", "") or failure.text
     without_check = aeroexec("replay", rec, "--spec", str(spec))
     assert without_check.returncode == 0  # reported, but --check decides the exit code
-    sharded = aeroexec("replay", rec, "--spec", str(spec), "--shard", "1/1", "-f", "json")
-    assert sharded.returncode == 2 and "--spec with --shard" in sharded.stderr
     kept = tmp_path / "again.mcap"
     written = aeroexec("replay", rec, "--spec", str(spec), "-o", str(kept))
     assert f"{kept}: t=4.00s: error ceiling" in written.stdout
+
+
+def test_replay_spec_in_worker_processes_and_shards_gives_the_same_verdicts(
+    recordings, tmp_path
+) -> None:
+    # Each replay is checked where it runs (a worker process, a Ray node) and its verdicts
+    # travel with its result: --jobs 2 says what --jobs 1 says, and a shard's JSON report
+    # carries its own replays' verdicts, which `report merge` puts back together.
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(SPEC, encoding="utf-8")
+    recs = [str(recordings["appendix_c"]), str(recordings["patrol"])]
+    args = ["replay", *recs, "--spec", "aeroexec:safety", "--spec", str(spec), "--check"]
+    alone = aeroexec(*args, "--jobs", "1")
+    assert alone.returncode == 1  # appendix_c's replay climbs above 1.4 m
+    assert f"{recs[0]} (replay): t=4.00s: error ceiling:" in alone.stdout
+    assert f"{recs[1]} (replay): t=" in alone.stdout  # the patrol flies at 1.5 m too
+    assert "2 recording(s), 12 check(s): 2 violated" in alone.stdout
+    pooled = aeroexec(*args, "--jobs", "2")
+    assert (pooled.returncode, pooled.stdout) == (alone.returncode, alone.stdout)
+    whole = aeroexec(*args, "-f", "json")
+    shards = []
+    for k in (1, 2):
+        done = aeroexec(*args, "--shard", f"{k}/2", "-f", "json")
+        shard = json.loads(done.stdout)
+        # A shard reports its own replays' verdicts, and fails --check on its own.
+        names = [r["recording"] for r in shard["properties"]["recordings"]]
+        assert names == [f"{r['recording']} (replay)" for r in shard["recordings"]]
+        assert done.returncode == (1 if names else 0), done.stderr
+        shards.append(tmp_path / f"shard-{k}.json")
+        shards[-1].write_text(done.stdout, encoding="utf-8")
+    merged = aeroexec("report", "merge", *map(str, shards), "--check", "-f", "json")
+    assert (merged.returncode, json.loads(merged.stdout)) == (1, json.loads(whole.stdout))
+    text = aeroexec("report", "merge", *map(str, shards), "--check")
+    assert (text.returncode, text.stdout) == (alone.returncode, alone.stdout)
+    junit = ET.fromstring(aeroexec("report", "merge", *map(str, shards), "-f", "junit").stdout)
+    suites = [s.get("name") for s in junit.iter("testsuite")]
+    assert f"properties: {recs[0]} (replay)" in suites
+    # Shards of another property set are not one run.
+    other = aeroexec("replay", *recs, "--spec", "aeroexec:safety", "--shard", "2/2", "-f", "json")
+    shards[1].write_text(other.stdout, encoding="utf-8")
+    refused = aeroexec("report", "merge", *map(str, shards))
+    assert refused.returncode == 2 and "settings" in refused.stderr
 
 
 def test_run_spec_reports_and_fails_on_a_violation(tmp_path) -> None:

@@ -43,8 +43,8 @@ properties:
 """
 
 
-def _run(tmp: Path, name: str, specs: list[str], world: Path | None = None):
-    monitor = PropertyMonitor(load_properties(specs))
+def _run(tmp: Path, name: str, specs: list[str], world: Path | None = None, every: float = 0.5):
+    monitor = PropertyMonitor(load_properties(specs), check_every_s=every)
     out = tmp / f"{name}.mcap"
     with contextlib.redirect_stdout(io.StringIO()):
         result = simulate(
@@ -97,6 +97,36 @@ def test_a_geofence_with_land_ends_the_flight_at_the_fence(tmp_path) -> None:
     offline = check_recording(recording, load_properties([str(spec), "aeroexec:safety"]))
     _same(monitor.verdicts, offline.verdicts)
     assert [v.name for v in offline.violated] == ["geofence"]
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        "command_GO_TO_POINT <= 0",  # judged tick by tick
+        "historically[0:0.2](command_GO_TO_POINT <= 0)",  # judged on arrays, every 0.5 s
+    ],
+)
+def test_a_command_is_judged_on_the_tick_it_is_issued(tmp_path, body) -> None:
+    # A mission command comes after its tick's vehicle state: a tick is judged when it is
+    # over, so the command's one-tick pulse is seen online where check sees it (judged
+    # every tick, as `fly` does, a tick judged at its vehicle state would miss it).
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(
+        f"properties:\n  - name: no_go_to\n    formula: always({body})\n    action: abort\n",
+        encoding="utf-8",
+    )
+    monitor, result, recording = _run(tmp_path, "commanded", [str(spec)], every=0.1)
+    commands = [
+        r
+        for r in open_recording(recording).records()
+        if getattr(r, "name", "") == "mission/command" and r.data["behavior"] == "GO_TO_POINT"
+    ]
+    issued_s = commands[0].log_time_ns / 1e9
+    assert monitor.stopped_at_s == pytest.approx(issued_s)
+    assert result.outcome.ending is Ending.STOPPED
+    [offline] = check_recording(recording, load_properties([str(spec)])).verdicts
+    assert offline.interval_s[0] == monitor.stopped_at_s
+    _same(monitor.verdicts, [offline])
 
 
 def test_rtl_returns_home_and_lands_hold_keeps_flying_abort_stops(tmp_path) -> None:
@@ -188,8 +218,11 @@ def test_fly_spec_lands_at_the_geofence_and_the_verdicts_match_check(tmp_path) -
     assert result.ending is not None and result.ending.down
     assert any(a.startswith("switched to LAND") for a in result.ending.actions)
     assert final["mode"] == "LAND" and not final["armed"]
-    # It landed at the fence, not at the mission's target 12 m away.
-    assert 4.0 < math.hypot(*final["position"][:2]) < 6.0
+    # It landed at the fence, not at the mission's target 12 m away: past it by what it
+    # flies from the crossing to the stop (a tick is judged once over, at the next one's
+    # vehicle state, and the stop comes at the step after: two ticks, 0.2 s of wall time
+    # and 0.4 s of MavSim's, which runs at twice its speed), then its braking.
+    assert 4.0 < math.hypot(*final["position"][:2]) < 7.0
     published = [
         r.data for r in open_recording(out).records() if getattr(r, "name", "") == "properties"
     ]
@@ -230,3 +263,30 @@ def test_the_foxglove_layout_shows_properties_beside_behavior_events() -> None:
     values = [path["value"] for path in panel["paths"]]
     assert "/drone1/properties.property" in values
     assert "/drone1/properties.status" in values
+
+
+def test_the_bus_calls_the_monitor_only_for_what_its_signals_come_from(tmp_path) -> None:
+    # `reads`: a session publishes some 25 topics and services (beliefs, process states,
+    # the specialist's calls...); signals come from 7, and the others are not delivered.
+    from aeroexec.executive.bus import MemoryObserver
+
+    class Seen(PropertyMonitor, MemoryObserver):
+        def __init__(self) -> None:
+            PropertyMonitor.__init__(self, load_properties(["aeroexec:safety"]))
+            MemoryObserver.__init__(self)
+
+        def on_topic(self, record) -> None:
+            MemoryObserver.on_topic(self, record)
+            PropertyMonitor.on_topic(self, record)
+
+        def on_service_call(self, record) -> None:
+            MemoryObserver.on_service_call(self, record)
+            PropertyMonitor.on_service_call(self, record)
+
+    seen, everything = Seen(), MemoryObserver()
+    with contextlib.redirect_stdout(io.StringIO()):
+        simulate(SessionConfig(mission=APPENDIX_C), observers=[seen, everything])
+    names = {getattr(r, "topic", None) or r.service for r in seen.records}
+    assert names == set(PropertyMonitor.reads)  # all 7, and no other
+    assert len(everything.records) > 3 * len(seen.records)
+    assert {getattr(r, "topic", None) or r.service for r in everything.records} > names

@@ -127,4 +127,5 @@ def test_the_builtin_table_is_the_builtin_file() -> None:
     rows = {r[0].strip("`"): r[1].strip("`") for r in _rows(section)}
     builtin = {p.name: p.formula.text for p in load_properties(["aeroexec:safety"]).properties}
     assert rows == builtin
-    assert re.search(r"eventually\[0:30\]", rows["grounded_lands"])
+    assert re.search(r"eventually\[0:land_within_s\]", rows["grounded_lands"])
+    assert "`land_within_s` (30 s)" in section

@@ -251,3 +251,87 @@ def test_the_engine_never_loads_rtamt_or_antlr() -> None:
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+# -- long windows and one sample at a time (what the online monitor uses) --------------------------
+@pytest.mark.parametrize("op", ["always", "eventually", "historically", "once"])
+def test_long_windows_reduce_exactly_the_samples_they_cover(op: str) -> None:
+    # Windows longer than a few samples are reduced block-wise (van Herk/Gil-Werman): the
+    # same values as the definition, NaN and infinities included, at both ends.
+    rng = np.random.default_rng(5)
+    x = np.round(rng.random(400), 2)
+    x[rng.random(400) < 0.03] = np.nan
+    x[rng.random(400) < 0.03] = np.inf
+    x[rng.random(400) < 0.03] = -np.inf
+    ahead = op in ("always", "eventually")
+    low = op in ("always", "historically")
+    for begin, end in ((0, 9), (3, 40), (0, 300), (17, 450)):
+        formula = compile_formula(
+            f"{op}[{begin / 10:g}:{end / 10:g}](altitude)", Mark("t.yaml"), is_known_signal
+        )
+        got = formula.robustness({"altitude": x}, len(x))
+        expected = []
+        for i in range(len(x)):
+            span = range(i + begin, i + end + 1) if ahead else range(i - end, i - begin + 1)
+            pad = np.inf if low else -np.inf
+            inside = [x[j] if 0 <= j < len(x) else pad for j in span]
+            expected.append(np.min(inside) if low else np.max(inside))
+        np.testing.assert_array_equal(got, expected, err_msg=f"{op}[{begin}:{end}]")
+
+
+def instant_boolean(rng: random.Random, depth: int) -> str:
+    roll = rng.random()
+    if depth <= 0 or roll < 0.3:
+        op = rng.choice(["<", "<=", ">", ">=", "==", "!=="])
+        left = arithmetic(rng, 1) if rng.random() < 0.8 else f"sqrt({arithmetic(rng, 1)})"
+        return f"{left} {op} {arithmetic(rng, 1)}"
+    if roll < 0.4:
+        return f"not({instant_boolean(rng, depth - 1)})"
+    if roll < 0.45:
+        return rng.choice(SIGNALS)  # a signal as a formula: its value is the verdict
+    op = rng.choice(["and", "or", "implies", "iff", "xor", "->", "&", "|"])
+    return f"({instant_boolean(rng, depth - 1)}) {op} ({instant_boolean(rng, depth - 1)})"
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_one_sample_at_a_time_gives_the_arrays_verdict(seed: int) -> None:
+    # The monitor judges bodies without temporal operators tick by tick on Python floats
+    # (semantics.instant): at every sample the same verdict as the arrays, and the same
+    # value but for a zero's sign, or an error where numpy makes an inf or a nan of one.
+    rng = random.Random(seed)
+    values = [0.0, -0.0, 0.5, -0.5, 1.0, 2.0, -3.0, np.inf, -np.inf, np.nan, 1e308, 0.1]
+    data = {name: np.array([rng.choice(values) for _ in range(60)]) for name in SIGNALS}
+    judged = 0
+    for _ in range(10):
+        text = instant_boolean(rng, 3)
+        tree = compile_formula(text, Mark("t.yaml"), is_known_signal).tree
+        at = semantics.instant(tree)
+        assert at is not None, text
+        arrays = semantics.series(tree, data, 60, boolean=True)
+        for i in range(60):
+            sample = {name: float(column[i]) for name, column in data.items()}
+            try:
+                value = at(sample)
+            except (ArithmeticError, ValueError):
+                continue
+            judged += 1
+            assert (value < 0) == (arrays[i] < 0), (text, i)
+            assert value == arrays[i] or (np.isnan(value) and np.isnan(arrays[i])), (text, i)
+    assert judged > 300  # most samples are judged this way
+
+
+def test_only_bodies_of_the_present_sample_are_judged_one_sample_at_a_time() -> None:
+    for text in (
+        "eventually[0:1](altitude > 1)",
+        "prev(altitude > 1)",
+        "rise(altitude > 1)",
+        "(altitude > 1) until (speed > 1)",
+        "exp(altitude) > 1",  # Python's math and numpy may round exp and pow apart
+        "pow(altitude, 2) > 1",
+    ):
+        tree = compile_formula(text, Mark("t.yaml"), is_known_signal).tree
+        assert semantics.instant(tree) is None, text
+    at = semantics.instant(compile_formula("altitude / speed > 1", Mark("t"), is_known_signal).tree)
+    assert at is not None
+    with pytest.raises(ZeroDivisionError):  # numpy: inf; the monitor judges it on arrays
+        at({"altitude": 1.0, "speed": 0.0})

@@ -14,10 +14,12 @@ from typer.testing import CliRunner
 from aeroexec.cli import app
 from aeroexec.errors import InjectionError
 from aeroexec.mission.session import SessionConfig, simulate
+from aeroexec.properties.spec import load_properties
 from aeroexec.recording import open_recording
 from aeroexec.recording.transitions import read_transitions, resolve_when
 from aeroexec.replay.engine import ReplayOptions, replay_recording
 from aeroexec.replay.inject import parse_injection
+from aeroexec.replay.tasks import ReplayTask, run_task
 
 ROOT = Path(__file__).resolve().parent.parent
 MISSION = ROOT / "missions" / "appendix_c.py"
@@ -134,9 +136,9 @@ def test_a_fault_the_mission_survives_passes_check_and_says_what_failed(
         trust_recording=True,
         injections=(parse_injection("lost_position@activate:GO_TO_POINT#1"),),
         output=str(tmp_path / "position.mcap"),
-        spec=("aeroexec:safety",),
+        properties=load_properties(["aeroexec:safety"]).documents,
     )
-    result = replay_recording(flight, options)
+    result = run_task(ReplayTask(0, str(flight), str(flight), options))
     assert result.checked and result.violated == ()
     assert result.failures == (
         "#2 GO_TO_POINT relative_coordinates=[0, 0, 0.5]: PROCESS_FAILURE "

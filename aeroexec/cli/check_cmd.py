@@ -68,7 +68,7 @@ def check(
         if prop is None:
             names = ", ".join(p.name for p in properties.properties)
             raise PropertyError(f"no property '{explain}' (there are: {names})")
-        typer.echo(render.explain(prop), nl=False)
+        typer.echo(render.explain(prop, properties.parameters), nl=False)
         return
     if not recordings:
         raise PropertyError("no recording given (try: aeroexec check flight.mcap)")

@@ -6,7 +6,6 @@ import contextlib
 import dataclasses
 import os
 import sys
-import tempfile
 import time
 from enum import Enum
 from pathlib import Path
@@ -38,8 +37,8 @@ from aeroexec.cli.project import (
 )
 from aeroexec.cli.spec import (
     SpecOption,
-    check_recording,
     load_spec,
+    verdicts_failed,
     verdicts_text,
     with_safety,
     with_verdicts_json,
@@ -160,8 +159,7 @@ def replay(
         typer.Argument(
             metavar="REC...",
             help="Recordings (.mcap, ROS 1 .bag, ROS 2 bags: a rosbag2 directory, a .db3, "
-            "a ros2 .mcap), directories (every *.mcap, *.bag, *.db3 and rosbag2 directory "
-            "inside) or quoted globs.",
+            "a ros2 .mcap), directories (every *.mcap and *.bag inside) or quoted globs.",
             show_default=False,
         ),
     ],
@@ -297,50 +295,36 @@ def replay(
     if mission is not None:
         load_mission(mission)  # so is a bad mission script
     injections = tuple(parse_injection(text) for text in inject or ())  # so is a bad FAULT
-    if (spec or injections) and shard is not None:
-        # `report merge` does not carry the shards' property verdicts yet: a merged
-        # --check would pass a violation.
-        given = "--spec" if spec else "--inject (checked against aeroexec:safety)"
-        raise AeroexecError(
-            f"{given} with --shard is not supported yet (report merge drops the verdicts)"
-        )
+    if injections and shard is not None:
+        # A shard's settings do not carry the faults: `report merge` could not tell a
+        # merged fault-free replay from an injected one.
+        raise AeroexecError("--inject with --shard is not supported")
     if injections:
         spec = with_safety(spec)
     properties = load_spec(spec)  # so is a bad property file
-    with contextlib.ExitStack() as scratch:
-        kept = True
-        if properties is not None and output is None and out_dir is None:
-            if executor.startswith("ray://"):
-                raise AeroexecError(
-                    "--spec and --inject check each replay's recording: not on a cluster"
-                )
-            # The properties are checked on each replay's recording: write them somewhere.
-            out_dir = scratch.enter_context(tempfile.TemporaryDirectory(prefix="aeroexec-"))
-            kept = False
-        _replay(
-            _Run(
-                recordings=recordings,
-                catalog=catalog,
-                mode=mode,
-                output=output,
-                out_dir=out_dir,
-                check=check,
-                jobs=jobs,
-                sources=sources,
-                shard=shard,
-                executor=executor,
-                output_format=output_format,
-                tolerance=tolerance,
-                position_tolerance=position_tolerance,
-                mission=mission,
-                trust_recording=trust_recording,
-                timing=timing,
-                started=started,
-                properties=properties,
-                kept=kept,
-                injections=injections,
-            )
+    _replay(
+        _Run(
+            recordings=recordings,
+            catalog=catalog,
+            mode=mode,
+            output=output,
+            out_dir=out_dir,
+            check=check,
+            jobs=jobs,
+            sources=sources,
+            shard=shard,
+            executor=executor,
+            output_format=output_format,
+            tolerance=tolerance,
+            position_tolerance=position_tolerance,
+            mission=mission,
+            trust_recording=trust_recording,
+            timing=timing,
+            started=started,
+            properties=properties,
+            injections=injections,
         )
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -365,8 +349,6 @@ class _Run:
     timing: Any
     started: float
     properties: PropertySet | None
-    #: The outputs are the user's (else a scratch directory for --spec, not reported).
-    kept: bool
     injections: tuple[Injection, ...] = ()
 
 
@@ -394,7 +376,7 @@ def _replay(run: _Run) -> None:
         run.timing,
         run.started,
     )
-    properties, kept = run.properties, run.kept
+    properties = run.properties
     options = ReplayOptions(
         catalog=str(catalog) if catalog is not None else None,
         mode=mode,
@@ -403,6 +385,8 @@ def _replay(run: _Run) -> None:
         behaviors=sources,
         mission=str(mission) if mission is not None else None,
         trust_recording=trust_recording,
+        # Checked where each replay runs (a scratch file there when it has no output).
+        properties=properties.documents if properties is not None else (),
         injections=run.injections,
     )
     inputs = expand_inputs(recordings)
@@ -448,16 +432,7 @@ def _replay(run: _Run) -> None:
     again = retried(results)
     if again:
         error_line(f"note: retried after a worker failure: {', '.join(again)}")
-    checked = []
-    if properties is not None:
-        for result in results:
-            if result.output is not None:
-                report = check_recording(result.output, properties)
-                # Named after what the user gave: the replay of that recording.
-                name = result.output if kept else f"{result.recording} (replay)"
-                checked.append(dataclasses.replace(report, recording=name))
-        if not kept:  # a scratch directory's files are gone when this returns
-            results = [dataclasses.replace(r, output=None) for r in results]
+    checked = [r.properties for r in results if r.properties is not None]
     if output_format is OutputFormat.json:
         document = replay_json(results) if part is None else shard_json(results, part)
         typer.echo(with_verdicts_json(document, checked) if properties is not None else document)
@@ -472,8 +447,7 @@ def _replay(run: _Run) -> None:
             typer.echo(verdicts_text(checked), nl=False)
     if any(r.error is not None for r in results):
         raise typer.Exit(2)
-    violated = any(report.failed for report in checked)
     # An injected replay is meant to differ: only what its properties say fails it.
     differs = not run.injections and not all(r.equal for r in results)
-    if check and (violated or differs):
+    if check and (verdicts_failed(checked) or differs):
         raise typer.Exit(1)

@@ -13,6 +13,12 @@ from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.command import Typer
 from aeroexec.cli.options import output_option
 from aeroexec.cli.replay_cmd import OutputFormat, report_format_option
+from aeroexec.cli.spec import (
+    verdicts_failed,
+    verdicts_text,
+    with_verdicts_json,
+    with_verdicts_junit,
+)
 from aeroexec.errors import Mark, ReportError
 from aeroexec.replay.merge import merge_shards, read_shard
 from aeroexec.replay.report import replay_json, replay_junit, replay_text
@@ -66,7 +72,11 @@ def merge(
     output: str | None = output_option("Write the report here (default: standard output)."),
     check: Annotated[
         bool,
-        typer.Option("--check", help="Exit 1 when any replay differs from its recording."),
+        typer.Option(
+            "--check",
+            help="Exit 1 when any replay differs from its recording (or, replayed with "
+            "--spec, violates a property).",
+        ),
     ] = False,
 ) -> None:
     """Merge the JSON reports of a sharded replay into the report the unsharded replay
@@ -79,15 +89,23 @@ def merge(
       aeroexec report merge shard-*.json --check --format junit -o replay.xml
 
     Exit codes: 0 merged (with --check: no differences); 1 with --check, some replay
-    differs; 2 a recording could not be read, or the shards could not be merged.
+    differs or violates a property (shards replayed with --spec); 2 a recording could
+    not be read, or the shards could not be merged.
     """
     results = merge_shards([read_shard(path) for path in shards])
+    # Shards replayed with --spec carry each replay's property verdicts: rendered as
+    # `replay --spec` renders them.
+    checked = [r.properties for r in results if r.properties is not None]
     if output_format is OutputFormat.json:
         text = replay_json(results)
+        text = with_verdicts_json(text, checked) if checked else text
     elif output_format is OutputFormat.junit:
         text = replay_junit(results)
+        text = with_verdicts_junit(text, checked) if checked else text
     else:
         text = replay_text(results)
+        if checked:
+            text = (text + "\n" if text else "") + verdicts_text(checked).rstrip("\n")
     if output is not None:
         _write(output, text + "\n")
     elif text:
@@ -97,5 +115,5 @@ def merge(
             error_line(f"{result.recording}: error: {result.error}")
     if any(r.error is not None for r in results):
         raise typer.Exit(2)
-    if check and not all(r.equal for r in results):
+    if check and (verdicts_failed(checked) or not all(r.equal for r in results)):
         raise typer.Exit(1)

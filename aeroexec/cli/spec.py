@@ -6,12 +6,12 @@ given --spec (or is `check`): `aeroexec run` without it starts as fast as before
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 if TYPE_CHECKING:
-    from aeroexec.properties.check import CheckReport, Verdict
+    from aeroexec.properties.check import Verdict
     from aeroexec.properties.monitor import PropertyMonitor
     from aeroexec.properties.spec import PropertySet
 
@@ -71,41 +71,42 @@ def load_spec(spec: list[str] | None) -> PropertySet | None:
     return load_properties(spec)
 
 
-def check_recording(path: str, properties: PropertySet) -> CheckReport:
-    from aeroexec.properties.check import check_recording as check
+def verdicts_text(entries: list[dict[str, Any]]) -> str:
+    """The verdicts of replays (`ReplayResult.properties`) as `check` prints them."""
+    from aeroexec.properties.report import text_of
 
-    return check(path, properties)
-
-
-def verdicts_text(reports: list[CheckReport]) -> str:
-    from aeroexec.properties.report import text
-
-    return text(reports)
+    return text_of(entries)
 
 
-def with_verdicts_json(document: str, reports: list[CheckReport]) -> str:
+def verdicts_failed(entries: list[dict[str, Any]]) -> bool:
+    from aeroexec.properties.report import failed
+
+    return failed(entries)
+
+
+def with_verdicts_json(document: str, entries: list[dict[str, Any]]) -> str:
     """A JSON report with the properties' verdicts added under `properties`."""
     import json
 
-    from aeroexec.properties.report import as_json
+    from aeroexec.properties.report import json_of
 
     body = json.loads(document)
-    body["properties"] = json.loads(as_json(reports))
+    body["properties"] = json_of(entries)
     return json.dumps(body, indent=2)
 
 
-def with_verdicts_junit(document: str, reports: list[CheckReport]) -> str:
+def with_verdicts_junit(document: str, entries: list[dict[str, Any]]) -> str:
     """A JUnit report with one more test suite per checked recording."""
     from xml.etree import ElementTree as ET
 
-    from aeroexec.properties.report import junit
+    from aeroexec.properties.report import junit_of
 
     root = ET.fromstring(document)
     if root.tag == "testsuite":  # one suite: both go under <testsuites>
         outer = ET.Element("testsuites", name=root.get("name", ""))
         outer.append(root)
         root = outer
-    for suite in ET.fromstring(junit(reports)).iter("testsuite"):
+    for suite in ET.fromstring(junit_of(entries)).iter("testsuite"):
         suite.set("name", f"properties: {suite.get('name')}")
         root.append(suite)
     ET.indent(root)

@@ -332,7 +332,7 @@ def signal_uses(specs: list[str]) -> tuple[list[SignalUse], list[InputError]]:
     errors: list[InputError] = []
     for spec in specs:
         try:
-            properties = load_properties([spec])
+            properties = load_properties([spec], alone=True)
         except AeroexecError as exc:
             errors.append(InputError.of(exc, spec))
             continue

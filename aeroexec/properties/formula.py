@@ -27,7 +27,7 @@ import numpy as np
 
 from aeroexec.errors import Mark, PropertyError
 from aeroexec.properties import nodes, semantics
-from aeroexec.properties.lexer import FormulaSyntaxError, tokenize
+from aeroexec.properties.lexer import FormulaSyntaxError, Token, tokenize
 from aeroexec.properties.parser import parse
 from aeroexec.properties.signals import PERIOD_NS, PERIOD_S
 
@@ -43,6 +43,8 @@ class Formula:
     tree: nodes.Node
     #: Every use of a signal in the text, with its place in the property file.
     uses: tuple[tuple[str, Mark], ...] = ()
+    #: The parameters it reads (property files' `parameters:`), in order of appearance.
+    parameters: tuple[str, ...] = ()
 
     @cached_property
     def _sound(self) -> bool:
@@ -80,6 +82,13 @@ class Formula:
         if future is None or past is None:
             return None
         return past, future
+
+    @cached_property
+    def instant_body(self) -> Callable[[semantics.Sample], float] | None:
+        """The body of a top-level `always` as a function of one sample's values, when it
+        reads only the present sample (`semantics.instant`); else None."""
+        body = self._always_body
+        return None if body is None else semantics.instant(body)
 
     def body_verdicts(self, columns: Mapping[str, Sequence[float]], length: int) -> np.ndarray:
         """The body of a top-level `always`, per sample: > 0 holds, < 0 violated."""
@@ -132,14 +141,32 @@ class Outcome:
     interval: tuple[int, int] | None
 
 
-def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Formula:
+def compile_formula(
+    text: str,
+    mark: Mark,
+    known: Callable[[str], bool],
+    parameters: Mapping[str, tuple[str, Mark]] | None = None,
+) -> Formula:
     """Check and parse `text` (written at `mark`); `PropertyError` at the offending
-    column for anything that is not an expression over known signals."""
+    column for anything that is not an expression over known signals. `parameters`:
+    names that stand for a number (its decimal text, and where it is set), wherever a
+    number may stand: in a bound (`eventually[0:land_within_s]`) or a comparison. A
+    value that does not fit there is an error where it is set."""
+    #: (line, column) of each parameter in the text -> its name.
+    standing: dict[tuple[int, int], str] = {}
     try:
         lexed = tokenize(text)
         names: list[str] = []
         uses: list[tuple[str, Mark]] = []
-        for token in lexed:
+        read: list[str] = []
+        for index, token in enumerate(lexed):
+            if token.kind == "name" and parameters and token.text in parameters:
+                value = parameters[token.text][0]
+                lexed[index] = Token("number", value, token.line, token.column)
+                standing[token.line, token.column] = token.text
+                if token.text not in read:
+                    read.append(token.text)
+                continue
             if token.kind == "forbidden":
                 raise FormulaSyntaxError(
                     f"'{token.text}' has no place in a formula (an expression over signals)",
@@ -159,10 +186,17 @@ def compile_formula(text: str, mark: Mark, known: Callable[[str], bool]) -> Form
                 uses.append((token.text, _at(mark, token.line, token.column)))
         if len(lexed) == 1:
             raise PropertyError("empty formula", mark)
-        tree = parse(text, PERIOD_NS)
+        tree = parse(text, PERIOD_NS, lexed)
     except FormulaSyntaxError as exc:
-        raise PropertyError(exc.message, _at(mark, exc.line, exc.column)) from None
-    return Formula(text, tuple(names), mark, tree, tuple(uses))
+        place = _at(mark, exc.line, exc.column)
+        name = standing.get((exc.line, exc.column))
+        if name is not None and parameters is not None:
+            value, where = parameters[name]
+            raise PropertyError(
+                f"parameter '{name}' = {value}: {exc.message} (in the formula at {place})", where
+            ) from None
+        raise PropertyError(exc.message, place) from None
+    return Formula(text, tuple(names), mark, tree, tuple(uses), tuple(read))
 
 
 def _has(node: nodes.Node, test: Callable[[nodes.Node], bool]) -> bool:

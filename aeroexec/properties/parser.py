@@ -62,10 +62,11 @@ _PREFIX: dict[str, tuple[int, str]] = {
 _UNIT_NS = {"s": 1_000_000_000, "ms": 1_000_000, "us": 1_000, "ns": 1}
 
 
-def parse(text: str, period_ns: int) -> nodes.Node:
+def parse(text: str, period_ns: int, tokens: list[Token] | None = None) -> nodes.Node:
     """The tree of `text`, its bounds in ticks of `period_ns`; `FormulaSyntaxError` at the
-    first token that does not fit."""
-    return _Parser(tokenize(text), period_ns).formula()
+    first token that does not fit. `tokens`: `text`'s, already cut (and a parameter's
+    name replaced by its number)."""
+    return _Parser(tokens if tokens is not None else tokenize(text), period_ns).formula()
 
 
 class _Parser:

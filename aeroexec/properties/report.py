@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree as ET
@@ -17,7 +17,7 @@ from xml.etree import ElementTree as ET
 from aeroexec import __version__
 from aeroexec.properties.check import MISSING, VIOLATED, CheckReport, Verdict
 from aeroexec.properties.signals import FAMILIES, SIGNALS
-from aeroexec.properties.spec import Property
+from aeroexec.properties.spec import Parameter, Property
 
 _LEVEL = {"error": "error", "warning": "warning", "note": "note"}
 _GITHUB = {"error": "error", "warning": "warning", "note": "notice"}
@@ -28,28 +28,59 @@ def _t(verdict: Verdict) -> str:
     return f"t={start:.2f}s"
 
 
+# text, JSON and JUnit render a recording's verdicts from their JSON form (`recording_json`):
+# a replay's worker (a process, a Ray node) sends that form back, a shard's report carries
+# it, and `report merge` renders it the same way (aeroexec.replay: the same bytes).
+def recording_json(report: CheckReport) -> dict[str, Any]:
+    """One recording's verdicts as plain data (JSON values, picklable)."""
+    return {
+        "recording": report.recording,
+        "duration_s": report.duration_s,
+        "verdicts": [verdict_json(v) for v in report.verdicts],
+    }
+
+
+def failed(entries: Sequence[dict[str, Any]]) -> bool:
+    """Whether a property of severity error was violated (`CheckReport.failed`)."""
+    return any(
+        v["status"] == VIOLATED and v["severity"] == "error"
+        for entry in entries
+        for v in entry["verdicts"]
+    )
+
+
+def _start(verdict: dict[str, Any]) -> str:
+    interval = verdict.get("interval")
+    return f"t={(interval['start_s'] if interval else 0.0):.2f}s"
+
+
 def text(reports: Sequence[CheckReport], *, verbose: bool = False) -> str:
     """`REC: t=12.40s: error PROPERTY: message (spec.yaml:LINE)`, one line per violation
     (and per property not checked), then a summary."""
+    return text_of([recording_json(r) for r in reports], verbose=verbose)
+
+
+def text_of(entries: Sequence[dict[str, Any]], *, verbose: bool = False) -> str:
+    """`text` of recordings' verdicts in their JSON form."""
     lines = []
-    for report in reports:
-        for verdict in report.verdicts:
-            prop = verdict.property
-            if verdict.status == VIOLATED:
+    for entry in entries:
+        recording = entry["recording"]
+        for verdict in entry["verdicts"]:
+            name, where, message = verdict["property"], verdict["defined_at"], verdict["message"]
+            if verdict["status"] == VIOLATED:
                 lines.append(
-                    f"{report.recording}: {_t(verdict)}: {prop.severity} {prop.name}: "
-                    f"{verdict.message()} ({prop.where})"
+                    f"{recording}: {_start(verdict)}: {verdict['severity']} {name}: "
+                    f"{message} ({where})"
                 )
-            elif verdict.status == MISSING:
-                lines.append(
-                    f"{report.recording}: note {prop.name}: {verdict.message()} ({prop.where})"
-                )
+            elif verdict["status"] == MISSING:
+                lines.append(f"{recording}: note {name}: {message} ({where})")
             elif verbose:
-                lines.append(f"{report.recording}: ok {prop.name}: {verdict.message()}")
-    violated = sum(len(r.violated) for r in reports)
-    checked = sum(1 for r in reports for v in r.verdicts if v.status != MISSING)
+                lines.append(f"{recording}: ok {name}: {message}")
+    all_verdicts = [v for entry in entries for v in entry["verdicts"]]
+    violated = sum(1 for v in all_verdicts if v["status"] == VIOLATED)
+    checked = sum(1 for v in all_verdicts if v["status"] != MISSING)
     lines.append(
-        f"{len(reports)} recording(s), {checked} check(s): "
+        f"{len(entries)} recording(s), {checked} check(s): "
         + (f"{violated} violated" if violated else "all properties hold")
     )
     return "\n".join(lines) + "\n"
@@ -68,6 +99,7 @@ def verdict_json(verdict: Verdict) -> dict[str, Any]:
         "robustness": _number(verdict.robustness),
         "defined_at": prop.where,
         "formula": prop.formula.text,
+        "message": verdict.message(),
     }
     if verdict.interval_s is not None:
         out["interval"] = {"start_s": verdict.interval_s[0], "end_s": verdict.interval_s[1]}
@@ -79,18 +111,13 @@ def verdict_json(verdict: Verdict) -> dict[str, Any]:
 
 
 def as_json(reports: Sequence[CheckReport]) -> str:
-    body = {
-        "recordings": [
-            {
-                "recording": r.recording,
-                "duration_s": r.duration_s,
-                "verdicts": [verdict_json(v) for v in r.verdicts],
-            }
-            for r in reports
-        ],
-        "violated": sum(len(r.violated) for r in reports),
-    }
-    return json.dumps(body, indent=2) + "\n"
+    return json.dumps(json_of([recording_json(r) for r in reports]), indent=2) + "\n"
+
+
+def json_of(entries: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The JSON report of recordings' verdicts in their JSON form."""
+    violated = sum(1 for e in entries for v in e["verdicts"] if v["status"] == VIOLATED)
+    return {"recordings": list(entries), "violated": violated}
 
 
 def _escape(value: str) -> str:
@@ -173,35 +200,40 @@ def sarif(reports: Sequence[CheckReport]) -> str:
 def junit(reports: Sequence[CheckReport], timestamp: str | None = None) -> str:
     """One test suite per recording, one test case per property: a violation is a
     failure, a property whose signals the recording lacks is skipped."""
+    return junit_of([recording_json(r) for r in reports], timestamp)
+
+
+def junit_of(entries: Sequence[dict[str, Any]], timestamp: str | None = None) -> str:
+    """`junit` of recordings' verdicts in their JSON form."""
     suites = ET.Element("testsuites", name="aeroexec check")
-    for report in reports:
+    for entry in entries:
+        recording, verdicts = entry["recording"], entry["verdicts"]
         suite = ET.SubElement(
             suites,
             "testsuite",
-            name=report.recording,
-            tests=str(len(report.verdicts)),
-            failures=str(len(report.violated)),
-            skipped=str(sum(1 for v in report.verdicts if v.status == MISSING)),
+            name=recording,
+            tests=str(len(verdicts)),
+            failures=str(sum(1 for v in verdicts if v["status"] == VIOLATED)),
+            skipped=str(sum(1 for v in verdicts if v["status"] == MISSING)),
         )
         if timestamp:
             suite.set("timestamp", timestamp)
-        for verdict in report.verdicts:
-            case = ET.SubElement(
-                suite, "testcase", classname=report.recording, name=verdict.property.name
-            )
-            if verdict.status == VIOLATED:
+        for verdict in verdicts:
+            case = ET.SubElement(suite, "testcase", classname=recording, name=verdict["property"])
+            if verdict["status"] == VIOLATED:
                 failure = ET.SubElement(
-                    case, "failure", message=f"{_t(verdict)}: {verdict.message()}"
+                    case, "failure", message=f"{_start(verdict)}: {verdict['message']}"
                 )
-                failure.text = f"{verdict.property.formula.text}\n({verdict.property.where})"
-            elif verdict.status == MISSING:
-                ET.SubElement(case, "skipped", message=verdict.message())
+                failure.text = f"{verdict['formula']}\n({verdict['defined_at']})"
+            elif verdict["status"] == MISSING:
+                ET.SubElement(case, "skipped", message=verdict["message"])
     ET.indent(suites)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, "unicode") + "\n"
 
 
-def explain(prop: Property) -> str:
-    """What `--explain PROPERTY` prints: the property and the signals it reads."""
+def explain(prop: Property, parameters: Iterable[Parameter] = ()) -> str:
+    """What `--explain PROPERTY` prints: the property, the signals it reads and the
+    parameters (of `parameters`, the set's) it reads."""
     lines = [
         f"{prop.name} ({prop.where})",
         f"  formula:  {prop.formula.text}",
@@ -217,6 +249,12 @@ def explain(prop: Property) -> str:
     lines.append("  signals:")
     for name in prop.formula.signals:
         lines.append(f"    {name}: {describe_signal(name)}")
+    given = {p.name: p for p in parameters}
+    if prop.formula.parameters:
+        lines.append("  parameters:")
+        for name in prop.formula.parameters:
+            if name in given:
+                lines.append(f"    {name} = {given[name].text} ({given[name].where})")
     return "\n".join(lines) + "\n"
 
 

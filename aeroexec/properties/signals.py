@@ -127,19 +127,42 @@ _FIELDS_OF: dict[str, tuple[str, ...]] = {
 
 #: The vehicle signals made from the state rows (link and grounded are changes).
 _ROW_SIGNALS = ("altitude", "speed", "battery", "flying", "landed", "armed", "distance_home")
+_IN_ROWS = frozenset(_ROW_SIGNALS)
 
 
 def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np.ndarray:
     """`name` from state rows (sample, x, y, z, speed, battery, flying, armed)."""
     if name == "distance_home":
-        return np.hypot(held[:, 1] - float(first[1]), held[:, 2] - float(first[2]))
+        # sqrt(dx*dx + dy*dy), not hypot: each step is rounded as IEEE says, so the online
+        # monitor's per-tick value (`SignalBuilder.latest`) is the same float.
+        dx, dy = held[:, 1] - float(first[1]), held[:, 2] - float(first[2])
+        return np.sqrt(dx * dx + dy * dy)
     if name == "landed":
         return 1.0 - held[:, 6]
     return held[:, {"altitude": 3, "speed": 4, "battery": 5, "flying": 6, "armed": 7}[name]]
 
 
+def _row_value(name: str, row: tuple[Any, ...], first: tuple[Any, ...]) -> float:
+    """`_vehicle_column` at one row, on Python floats (the same values, float for float)."""
+    column = _COLUMN_OF.get(name)
+    if column is not None:
+        return float(row[column])
+    if name == "distance_home":
+        dx, dy = float(row[1]) - float(first[1]), float(row[2]) - float(first[2])
+        return math.sqrt(dx * dx + dy * dy)
+    if name == "speed":
+        return math.sqrt(float(row[4]))
+    return 1.0 - float(row[6])  # landed
+
+
+_COLUMN_OF = {"altitude": 3, "battery": 5, "flying": 6, "armed": 7}
+
+
+_PLAIN = frozenset({int, float, bool})
+
+
 def _numeric(row: tuple[Any, ...]) -> bool:
-    return all(isinstance(v, (int, float)) for v in row)
+    return set(map(type, row)) <= _PLAIN or all(isinstance(v, (int, float)) for v in row)
 
 
 def is_known_signal(name: str) -> bool:
@@ -230,6 +253,9 @@ class SignalBuilder:
         #: vehicle/state fields some state had only as an importer's default.
         self._defaulted: set[str] = set()
         self._faults: set[str] = set()
+        #: The last row `latest` found to be numbers (each row is checked once).
+        self._checked_row: tuple[Any, ...] | None = None
+        self._home_numeric: bool | None = None
 
     # -- input ------------------------------------------------------------------------------
     def use_catalog(self, conflicts: Callable[[str], Iterable[str]]) -> None:
@@ -363,11 +389,60 @@ class SignalBuilder:
         fields = _FIELDS_OF.get(name, ("fault",) if name.startswith("fault_") else ())
         return any(f in self._defaulted for f in fields)
 
-    def window(self, start: int, names: Iterable[str]) -> dict[str, np.ndarray] | None:
-        """The samples from `start` to the last one of the signals `names`, as
-        `finish(start, final=False)` gives them, built from only what that window needs
-        (an online check looks at a few ticks); None when one of them is missing."""
-        length = self._last + 1 - start
+    def latest(self, names: Iterable[str], k: int) -> dict[str, float] | None:
+        """The values of `names` at sample `k`, the last one so far (no message after it
+        yet), as `window` gives them there, float for float, without arrays: what an
+        online monitor judges each tick by. None when one of them is missing, or not
+        known yet at that sample without what later messages say (a vehicle signal
+        before the first state, a state that is no row of numbers)."""
+        values: dict[str, float] = {}
+        row: tuple[Any, ...] | None = None
+        if self._defaulted and any(self._guessed(name) for name in names):
+            return None
+        current = self._current
+        for name in names:
+            if name in _IN_ROWS:
+                if row is None:
+                    row = self._numeric_last_row()
+                    if row is None:
+                        return None
+                values[name] = _row_value(name, row, self._rows[0])
+            elif name in current:
+                values[name] = current[name]
+            elif name in self._pulses:
+                values[name] = 1.0 if self._pulses[name][-1] == k else 0.0
+            elif name == "end" or any(
+                name.startswith(prefix) and source in self._sources
+                for prefix, source in _FAMILY_SOURCES.items()
+            ):
+                values[name] = 0.0
+            else:
+                return None
+        return values
+
+    def _numeric_last_row(self) -> tuple[Any, ...] | None:
+        """The last state row, when it and the first (home) are rows of numbers (a row
+        that is not is dropped offline: its tick holds an earlier one); else None."""
+        rows = self._rows
+        if not rows:
+            return None
+        row = rows[-1]
+        if row is not self._checked_row:
+            if self._home_numeric is None:  # the first row never changes: checked once
+                self._home_numeric = _numeric(rows[0])
+            if not (self._home_numeric and _numeric(row)):
+                return None
+            self._checked_row = row
+        return row
+
+    def window(
+        self, start: int, names: Iterable[str], end: int | None = None
+    ) -> dict[str, np.ndarray] | None:
+        """The samples from `start` to `end` (default: the last one so far) of the
+        signals `names`, as `finish(start, final=False)` gives them, built from only what
+        that window needs (an online check looks at a few ticks); None when one of them
+        is missing."""
+        length = (self._last if end is None else end) + 1 - start
         if length <= 0:
             return None
         samples = np.arange(start, start + length)

@@ -21,7 +21,7 @@ from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from aeroexec.bags.replay import bag_recording
 from aeroexec.bags.source import is_bag
@@ -38,6 +38,7 @@ from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.progress import ProgressFactory
+from aeroexec.properties.check import VIOLATED
 from aeroexec.recording.reader import attachment_place
 from aeroexec.recording.transitions import read_timeline
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
@@ -54,9 +55,6 @@ from aeroexec.replay.liveloop import is_live, replay_live
 from aeroexec.replay.openloop import replay_open
 from aeroexec.replay.outcome import NS_PER_S, RunOutcome
 from aeroexec.replay.progress import ReplayedTime
-
-if TYPE_CHECKING:
-    from aeroexec.properties.spec import PropertySet
 
 
 class Mode(str, Enum):
@@ -86,9 +84,10 @@ class ReplayOptions:
     #: A flight's recording replayed in the simulator, which takes the vehicle's place
     #: from the state the flight started in (its simulated twin; closed loop).
     twin: bool = False
-    #: Property files (and `aeroexec:safety`) to check the replay's recording against,
-    #: where it runs (`output` must be set): the verdicts travel back in the result.
-    spec: tuple[str, ...] = ()
+    #: Check each replay's recording against these properties (`--spec`): the name and
+    #: text of each property file (`PropertySet.documents`), so that a worker anywhere
+    #: loads the same set; the verdicts come back on `ReplayResult.properties`.
+    properties: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,6 +105,9 @@ class ReplayResult:
     notes: tuple[str, ...] = ()
     #: Behaviors whose code is not the code the recording ran (class or source changed).
     code_changes: tuple[str, ...] = ()
+    #: With `ReplayOptions.properties`: the replay's verdicts, in their JSON form
+    #: (`aeroexec.properties.report.recording_json`); None when not checked.
+    properties: dict[str, Any] | None = None
     #: Wall-clock seconds the replay took (JUnit's `time`); not part of the result's
     #: value: equal results compare equal however long they took.
     seconds: float | None = field(default=None, compare=False)
@@ -115,14 +117,23 @@ class ReplayResult:
     #: a failure (`#4 GO_TO_POINT ...: PROCESS_FAILURE (vehicle fault: link_lost)`), the
     #: mission's own failure.
     failures: tuple[str, ...] = ()
-    #: With `spec`: the properties of severity error the replay violated (names), and
-    #: whether it was checked at all.
-    violated: tuple[str, ...] = ()
-    checked: bool = False
 
     @property
     def equal(self) -> bool:
         return self.error is None and self.diff is not None and self.diff.equal
+
+    @property
+    def checked(self) -> bool:
+        """Whether the replay was checked against properties (`ReplayOptions.properties`)."""
+        return self.properties is not None
+
+    @property
+    def violated(self) -> tuple[str, ...]:
+        """The properties of severity error the replay violated (names)."""
+        verdicts = self.properties["verdicts"] if self.properties is not None else ()
+        return tuple(
+            v["property"] for v in verdicts if v["status"] == VIOLATED and v["severity"] == "error"
+        )
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -143,8 +154,7 @@ class ReplayResult:
                 if self.injected
                 else {}
             ),
-            **({"violated": list(self.violated)} if self.checked else {}),
-        }
+        } | ({"properties": self.properties} if self.properties is not None else {})
 
 
 def choose_mode(run: RecordedRun, requested: Mode | None) -> Mode:
@@ -255,9 +265,6 @@ def replay_recording(
         base_lines=lines_of[1],
     )
     notes.extend(diff.notes)
-    violated: tuple[str, ...] = ()
-    if options.spec and options.output is not None:
-        violated = _violated(options.output, options.spec)
     return ReplayResult(
         recording=name,
         mode=mode.value,
@@ -269,8 +276,6 @@ def replay_recording(
         code_changes=changed,
         injected=tuple(r.describe() for r in injected),
         failures=run_failures(replayed, how) if injected else (),
-        violated=violated,
-        checked=bool(options.spec and options.output is not None),
     )
 
 
@@ -350,24 +355,6 @@ def _fault_arguments(injected: tuple[ResolvedInjection, ...]) -> dict[str, Any]:
         "faults": tuple(r.failure for r in injected),
         "faults_metadata": injected_metadata(injected),
     }
-
-
-def _violated(output: str, spec: tuple[str, ...]) -> tuple[str, ...]:
-    """The properties of severity error the recording `output` violates."""
-    # Imported here for start-up time: the properties bring numpy, which a replay without
-    # properties never needs.
-    from aeroexec.properties.check import check_recording
-
-    report = check_recording(output, _properties(spec))
-    return tuple(v.name for v in report.violated if v.property.severity == "error")
-
-
-@functools.lru_cache(maxsize=4)
-def _properties(spec: tuple[str, ...]) -> PropertySet:
-    """A worker reads the property files once for all the replays it runs."""
-    from aeroexec.properties.spec import load_properties
-
-    return load_properties(list(spec))
 
 
 def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:

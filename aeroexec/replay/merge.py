@@ -82,7 +82,22 @@ def result_from_dict(data: dict[str, Any], tolerance: Tolerance) -> ReplayResult
         output=data["output"],
         notes=tuple(str(n) for n in data["notes"]),
         code_changes=tuple(str(c) for c in data.get("code_changes", ())),
+        properties=_verdicts(data.get("properties")),
     )
+
+
+def _verdicts(data: Any) -> dict[str, Any] | None:
+    """A recording's property verdicts, as `replay --spec` wrote them (checked: each has
+    what the reports render from it)."""
+    if data is None:
+        return None
+    for verdict in data["verdicts"]:
+        for key in ("property", "status", "severity", "defined_at", "formula", "message"):
+            if not isinstance(verdict[key], str):
+                raise TypeError(f"property verdict {key!r} is not text")
+    if not isinstance(data["recording"], str):
+        raise TypeError("property verdicts' recording is not text")
+    return dict(data)
 
 
 def _tolerance(settings: dict[str, Any]) -> Tolerance:

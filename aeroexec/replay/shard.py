@@ -102,14 +102,18 @@ class ShardSlice:
 
 
 def settings_of(options: ReplayOptions) -> dict[str, Any]:
-    """What the shards of one run must agree on (JSON values): the catalog, the mode and
-    the tolerances. (Outputs are per shard.)"""
-    return {
+    """What the shards of one run must agree on (JSON values): the catalog, the mode,
+    the tolerances and the property files (`--spec`). (Outputs are per shard.)"""
+    settings = {
         "catalog": options.catalog,
         "mode": options.mode.value if options.mode is not None else None,
         "tolerance_s": options.tolerance.time_s,
         "position_tolerance_m": options.tolerance.position_m,
     }
+    if options.properties:  # --spec: the same property files, the same texts
+        digest = hashlib.sha256(repr(options.properties).encode()).hexdigest()[:16]
+        settings["properties"] = [*(name for name, _ in options.properties), digest]
+    return settings
 
 
 def slice_for(names: Sequence[str], shard: Shard, settings: dict[str, Any]) -> ShardSlice:

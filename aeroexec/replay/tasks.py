@@ -9,9 +9,11 @@ input) is that recording's error result, and the rest of the batch goes on.
 
 from __future__ import annotations
 
+import functools
 import gc
 import itertools
 import os
+import tempfile
 import traceback
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -19,6 +21,9 @@ from pathlib import Path
 
 from aeroexec.errors import AeroexecError
 from aeroexec.progress import ProgressFactory
+from aeroexec.properties.check import check_recording
+from aeroexec.properties.report import recording_json
+from aeroexec.properties.spec import PropertySet, load_property_documents
 from aeroexec.replay.engine import ReplayOptions, ReplayResult, output_for, replay_file
 from aeroexec.replay.remote import fetched, is_url
 
@@ -82,9 +87,41 @@ def make_tasks(
 
 def run_task(task: ReplayTask, progress: ProgressFactory | None = None) -> ReplayResult:
     """Replay one recording; every problem with it is its error result. `progress`: see
-    `replay_recording`."""
+    `replay_recording`. With properties (`ReplayOptions.properties`), the replay's
+    recording is checked here, where it was written (a scratch file when the task has no
+    output), and the verdicts travel back with the result."""
     if next(_replays) % COLLECT_EVERY == 0:
         gc.collect()
+    if not task.options.properties:
+        return _replay(task, progress)
+    with tempfile.TemporaryDirectory(prefix="aeroexec-replay-") as scratch:
+        kept = task.options.output is not None
+        if not kept:
+            output = output_for(task.recording, scratch)
+            task = replace(task, options=replace(task.options, output=output))
+        result = _replay(task, progress)
+        if result.error is not None or result.output is None:
+            return result if kept else replace(result, output=None)
+        try:
+            report = check_recording(result.output, _property_set(task.options.properties))
+        except AeroexecError as exc:  # the replay's own file could not be read back
+            return replace(result, output=None, error=f"checking its properties: {exc}")
+        # Named after what the user gave: the file they asked for, or the replay of theirs.
+        name = result.output if kept else f"{task.recording} (replay)"
+        return replace(
+            result,
+            output=result.output if kept else None,
+            properties=recording_json(replace(report, recording=name)),
+        )
+
+
+@functools.lru_cache(maxsize=4)
+def _property_set(documents: tuple[tuple[str, str], ...]) -> PropertySet:
+    """The properties of a task, loaded once per worker process for all its tasks."""
+    return load_property_documents(documents)
+
+
+def _replay(task: ReplayTask, progress: ProgressFactory | None) -> ReplayResult:
     try:
         if is_url(task.location):
             with fetched(task.location) as local:

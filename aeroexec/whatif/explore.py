@@ -31,6 +31,7 @@ from pathlib import Path
 
 from aeroexec.errors import Mark, RecordingError
 from aeroexec.plugins.discovery import BehaviorSources
+from aeroexec.properties.spec import load_properties
 from aeroexec.recording.reader import open_recording
 from aeroexec.recording.schemas import PROFILE
 from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, replay_recording
@@ -153,7 +154,12 @@ def reproduce_command(run: Run, kept: str, options: ExploreOptions) -> str:
 
 
 def _task(
-    index: int, run: Run, scratch: Path, options: ExploreOptions, absolute: bool
+    index: int,
+    run: Run,
+    scratch: Path,
+    options: ExploreOptions,
+    absolute: bool,
+    documents: tuple[tuple[str, str], ...],
 ) -> ReplayTask:
     output = scratch / f"{index}.mcap"
     location = os.path.abspath(run.recording) if absolute else run.recording
@@ -169,7 +175,7 @@ def _task(
             mission=options.mission,
             trust_recording=options.trust_recording,
             injections=(Injection(FaultSpec(run.fault), run.when, run.due_ns),),
-            spec=options.spec,
+            properties=documents,
         ),
     )
 
@@ -206,7 +212,12 @@ def explore(
     scratch = Path(tempfile.mkdtemp(prefix=".explore-", dir=out))
     try:
         absolute = executor.needs_absolute_paths
-        tasks = [_task(i, run, scratch, options, absolute) for i, run in enumerate(the_plan.runs)]
+        # Read once here; each worker loads the same set from the documents' text.
+        documents = load_properties(list(options.spec)).documents
+        tasks = [
+            _task(i, run, scratch, options, absolute, documents)
+            for i, run in enumerate(the_plan.runs)
+        ]
         for done in executor.run(tasks):
             run = the_plan.runs[done.index]
             judged = _judged(run, done.result)
