@@ -22,9 +22,10 @@ from aeroexec.recording.reader import (
 )
 from aeroexec.recording.recover import RecoverReport, recover
 from aeroexec.recording.schemas import PROFILE
-from aeroexec.recording.writer import FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
+from aeroexec.recording.writer import FLUSH_BYTES, FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
 
 __all__ = [
+    "FLUSH_BYTES",
     "FLUSH_INTERVAL_NS",
     "FLUSH_MESSAGES",
     "PROFILE",
