@@ -219,8 +219,10 @@ def test_killed_fly_loses_at_most_half_a_second_of_wall_clock(
     processes.append(flight)
     flight.wait_for("waiting for a heartbeat")
     autopilot = AeroexecProcess(
-        ["mavsim", "--connect", f"udpout:127.0.0.1:{port}", "--speed-factor", "5"]
-        + ["--heartbeat-hz", "4", "--duration", "60"]
+        [
+            *("mavsim", "--connect", f"udpout:127.0.0.1:{port}"),
+            *("--speed-factor", "5", "--heartbeat-hz", "4", "--duration", "60"),
+        ]
     )
     processes.append(autopilot)
     flight.wait_for("hovering", timeout=30)

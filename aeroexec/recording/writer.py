@@ -504,11 +504,11 @@ class Recorder:
             self._unflushed_since = log_time_ns
         self._unflushed = unflushed = unflushed + 1
         self._unflushed_bytes = size = self._unflushed_bytes + len(data)
-        if unflushed >= self.flush_messages or size >= self.flush_bytes:
-            self.flush()
-        elif (
-            self.flush_interval_ns is not None
-            and log_time_ns - self._unflushed_since >= self.flush_interval_ns
+        interval = self.flush_interval_ns
+        if (
+            unflushed >= self.flush_messages
+            or size >= self.flush_bytes
+            or (interval is not None and log_time_ns - self._unflushed_since >= interval)
         ):
             self.flush()
 
