@@ -1,7 +1,7 @@
 """MCAP recording of executive sessions: the aeroexec profile (see docs/recording.md).
 
 - `Recorder` (writer.py): the bus observer that writes a session, deterministic and
-  crash-safe (flush bound: 100 messages or 0.5 s of clock time);
+  crash-safe (flush bound: 100 messages or 4 MiB; live flights also 0.5 s of wall clock);
 - `open_recording` (reader.py): typed, streaming reading of a recording, complete or not;
 - `recover` (recover.py): salvage an unfinished or damaged file into a complete one;
 - `recording_info` (info.py): what `aeroexec info` prints;

@@ -311,6 +311,14 @@ class Recorder:
         #: The messages for Foxglove's panels. With the start pose known, their start
         #: comes before the session's first message; without, with the first state.
         self._panels = PanelFeed(self.drone, self._derived, world, start_pose)
+        #: What the panels derive from, by topic.
+        self._panel_inputs: dict[str, Callable[[Mapping[str, Any], int], None]] = {
+            "vehicle/state": self._panels.vehicle_state,
+            "list_of_active_capabilities": self._panels.capabilities,
+        }
+        #: topic -> (channel, what the panels derive from it): the topics written as
+        #: published (not `log` or `mission/command`), once their channel exists.
+        self._routes: dict[str, tuple[int, Callable[[Mapping[str, Any], int], None] | None]] = {}
         self._await_start = start_pose is not None
         self._count = 0
         self._flushed = 0
@@ -339,12 +347,32 @@ class Recorder:
             channel = self._services[service] = self._channel(self._prefix + service, SERVICE_CALL)
         data = call_message(record)
         log_time_ns = record.log_time_ns
-        self._write(channel, log_time_ns, encode_json(data))
+        try:
+            encoded = _ORJSON(data, default=_default)
+        except _ORJSON_ERROR:
+            encoded = encode_json(data)
+        self._write(channel, log_time_ns, encoded)
         if record.parent_seq is None:
             self._panels.call(data, log_time_ns)
 
     def on_topic(self, record: TopicRecord) -> None:
-        self.write_topic(record.topic, record.data, record.log_time_ns)
+        # Most of a session's messages take this path (vehicle states, beliefs): a topic
+        # already seen, written as published, is encoded and written right here.
+        topic = record.topic
+        route = self._routes.get(topic)
+        if route is None:
+            self.write_topic(topic, record.data, record.log_time_ns)
+            return
+        channel, then = route
+        data = record.data
+        log_time_ns = record.log_time_ns
+        try:
+            encoded = _ORJSON(data, default=_default)
+        except _ORJSON_ERROR:
+            encoded = encode_json(data)
+        self._write(channel, log_time_ns, encoded)
+        if then is not None:
+            then(data, log_time_ns)
 
     # -- public --------------------------------------------------------------------------
     def write_topic(self, topic: str, data: Mapping[str, Any], log_time_ns: int) -> None:
@@ -360,6 +388,8 @@ class Recorder:
             data = log_message(data, log_time_ns)
         elif topic == "mission/command":
             data = without_nulls(data)
+        elif topic not in self._routes:
+            self._routes[topic] = (channel, self._panel_inputs.get(topic))
         self._write(channel, log_time_ns, encode_json(data))
         if topic == "vehicle/state":
             self._panels.vehicle_state(data, log_time_ns)
