@@ -473,7 +473,11 @@ class Recorder:
             channel = self._topics[topic] = self._channel(
                 self._prefix + topic, schema_name_for_topic(topic)
             )
-        self._write(channel, log_time_ns, encode_json(data))
+        try:
+            encoded = _ORJSON(data, default=_default)
+        except _ORJSON_ERROR:
+            encoded = encode_json(data)
+        self._write(channel, log_time_ns, encoded)
 
     def _begin_panels(self, log_time_ns: int) -> None:
         """The panels' start, at the session's first log time."""
@@ -528,7 +532,6 @@ class Recorder:
         # add_message's arguments; the sequence is a uint32
         self._pending.append((channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF))
         self._count = count + 1
-        self._last_ns = log_time_ns
         unflushed = self._unflushed
         if not unflushed:
             self._unflushed_since = log_time_ns
@@ -550,6 +553,7 @@ class Recorder:
         add = self._add
         for message in pending:
             add(*message)
+        self._last_ns = pending[-1][1]
         pending.clear()
 
     def _flush(self) -> None:
