@@ -199,7 +199,7 @@ def mission_figures(workdir: Path, repeat: int, root: Path, names: list[str]) ->
         )
         # Whole processes: each round's figure is the process less its own start-up,
         # run right after it (a difference of two ~0.4 s processes: pairing them keeps
-        # the machine's drift out of it); a short mission gets three times the rounds.
+        # the machine's drift out of it); a mission under 0.5 s gets three times the rounds.
         whole: dict[str, list[float]] = {"off": [], "on": []}
         output = ["--output", str(whole_out)]
         start_output = ["--output", str(start_out)]
@@ -210,7 +210,7 @@ def mission_figures(workdir: Path, repeat: int, root: Path, names: list[str]) ->
                     [*run, *output], [*start, *start_output], str(root), whole["on"]
                 ),
             },
-            repeat if medians["off"] > 0.2 else 3 * repeat,
+            repeat if medians["off"] > 0.5 else 3 * repeat,
         )
         label = f"{name} ({len(records):,} messages)"
         figures += [
