@@ -31,9 +31,12 @@ Workloads:
 Targets (issue 17): (a) >= 50,000 activations/s; the activation cost of the walk (b2)
 <= 1.1x that of (a): the hard case, every activation a behavior of another group, so the
 catalog's size shows in everything an activation touches (indexes, cold memory), not
-only in the lookups of six warm behaviors. (b1) is printed beside it for scale. (An
-activation here is the coordinator's service alone; benchmarks/recording.py measures
-it with the executive step that follows it in a session.)
+only in the lookups of six warm behaviors. Issue 31 retired (b2)'s target: no call
+count grows with the catalog, and the remaining ~1.2x is cache behaviour, measured and
+explained in benchmarks/README.md; its line is still printed, marked retired. (b1) is
+printed beside it for scale. (An activation here is the coordinator's service alone;
+benchmarks/recording.py measures it with the executive step that follows it in a
+session.)
 
 All three are measured in one run, in interleaved rounds; each figure is the median
 round, in CPU time of the process (on a shared machine the wall clock also counts other
@@ -64,6 +67,10 @@ from aeroexec.vehicles.null import NullVehicle
 
 RATE_TARGET = 50_000.0
 RATIO_TARGET = 1.1
+#: Issue 31 retired (b2)'s target; the line stays, to watch it.
+WALK_RETIRED = (
+    "issue 31: no call count grows with the catalog; the rest is cold memory, benchmarks/README.md"
+)
 LARGE_BEHAVIORS = 10_000
 
 #: The cycle: (behavior, arguments); each preempts the one before it.
@@ -289,6 +296,7 @@ def main(argv: list[str] | None = None) -> int:
             m["default_cpu"],
             f"(a) {small}",
             RATIO_TARGET,
+            retired=WALK_RETIRED,
         ),
         Figure(
             f"(b1) activation cost, {large}, the same six behaviors (for scale)",

@@ -555,3 +555,35 @@ def test_markers_in_a_world_are_believed_once_each(catalog: Catalog) -> None:
     ex.run_for(5.0)
     added = [r for r in observer.topics("beliefs") if "visual_marker" in r["belief"]]
     assert added == [{"op": "add", "belief": "visual_marker(5)"}]
+
+
+def test_a_replaced_belief_is_one_message_that_names_both(catalog: Catalog) -> None:
+    # The feed replaces the position every tick the vehicle moves: one message, not a
+    # remove and an add (issue 31); what is believed is what the two would have said.
+    observer = MemoryObserver()
+    ex = executive(catalog, World(), observers=[observer])
+    ex.activate_behavior("TAKE_OFF", {})
+    ex.run_for(3.0)
+    changes = observer.topics("beliefs")
+    replaced = [c for c in changes if c["op"] == "replace"]
+    assert replaced and not [c for c in changes if c["op"] == "remove"]
+    believed: list[str] = []
+    for change in changes:
+        if change["op"] == "replace":
+            believed[believed.index(change["replaced"])] = change["belief"]
+        else:
+            believed.append(change["belief"])
+    assert sorted(believed) == sorted(ex.beliefs.texts())
+    positions = [c for c in replaced if c["belief"].startswith("position(")]
+    assert positions and all(c["replaced"].startswith("position(") for c in positions)
+    # Without `on_replace`, the store tells a replacement as a remove and an add.
+    changes_log = Changes()
+    plain = Beliefs(changes_log)
+    plain.add("yaw(self, 0)")
+    plain.add("yaw(self, 90)")
+    assert changes_log.log == [
+        ("add", "yaw(self, 0)"),
+        ("remove", "yaw(self, 0)"),
+        ("add", "yaw(self, 90)"),
+    ]
+    assert plain.version == 3

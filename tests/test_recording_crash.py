@@ -1,9 +1,13 @@
 """Crash safety: a recording process killed with SIGKILL loses at most the flush bound
-(100 messages / 0.5 s of clock time); `recover` returns everything before it.
+of its clock; `recover` returns everything before it.
 
-Two kinds of victims, each killed at several points: `aeroexec run --output` on a
-looping mission, and a small driver (tests/fixtures/recording/drive_executive.py) that
-prints exactly how many messages it has handed to the recorder.
+- Simulated sessions (count and size only): at most the last 99 messages. Victims,
+  each killed at several points: `aeroexec run --output` on a looping mission, and a
+  small driver (tests/fixtures/recording/drive_executive.py) that prints exactly how
+  many messages it has handed to the recorder.
+- Live flights (also 0.5 s of wall-clock time): `aeroexec fly --output` against
+  `aeroexec mavsim`, killed while the vehicle hovers, where a flight records ~40
+  messages a second, so 99 messages would be 2-3 s of it.
 """
 
 from __future__ import annotations
@@ -12,15 +16,19 @@ import json
 import signal
 import subprocess
 import sys
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from live_helpers import AeroexecProcess, free_udp_port, write_mission
 from mcap.reader import make_reader
+from mcap.records import Message as McapMessage
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.recording import FLUSH_INTERVAL_NS, FLUSH_MESSAGES, open_recording, recover
+from aeroexec.recording.scan import RecordScanner
 
 DRIVER = Path(__file__).resolve().parent / "fixtures" / "recording" / "drive_executive.py"
 LOOP_MISSION = """\
@@ -43,6 +51,15 @@ def _messages(path: Path) -> list[Message]:
             (channel.topic, message.log_time, message.data)
             for _, channel, message in make_reader(stream).iter_messages(log_time_order=False)
         ]
+
+
+def _chunks(path: Path) -> list[list[int]]:
+    """The log times of the messages of each complete chunk of a (cut) file."""
+    chunks: dict[int, list[int]] = {}
+    for offset, record in RecordScanner(path).records():
+        if isinstance(record, McapMessage):
+            chunks.setdefault(offset, []).append(record.log_time)
+    return list(chunks.values())
 
 
 def _kill_after(command: list[str], cwd: Path, stop: Callable[[str], bool]) -> list[str]:
@@ -74,7 +91,7 @@ def test_killed_driver_loses_at_most_the_flush_bound(tmp_path: Path, target: int
         tmp_path,
         lambda line: int(line.split()[0]) >= target,
     )
-    written, flushed, clock_ns = (int(x) for x in lines[-1].split())
+    written, flushed, _clock_ns = (int(x) for x in lines[-1].split())
     fixed = tmp_path / "fixed.mcap"
     report = recover(broken, fixed)
     recovered = _messages(fixed)
@@ -84,6 +101,12 @@ def test_killed_driver_loses_at_most_the_flush_bound(tmp_path: Path, target: int
     # been handed (the process may have written more before the signal arrived).
     assert len(recovered) >= flushed
     assert len(recovered) >= written - (FLUSH_MESSAGES - 1)
+    # A simulated session has no time bound: every chunk holds exactly 100 messages,
+    # however much clock time they span (here ~0.6 s: a live bound would cut them).
+    chunks = _chunks(broken)
+    assert all(len(chunk) == FLUSH_MESSAGES for chunk in chunks)
+    if target > 1:
+        assert max(chunk[-1] - chunk[0] for chunk in chunks) >= FLUSH_INTERVAL_NS
     # Recovered messages are exactly the start of an uninterrupted run's stream (the run
     # may have gone on after its last line was read: each iteration writes > 30 messages).
     reference = tmp_path / "reference.mcap"
@@ -97,9 +120,6 @@ def test_killed_driver_loses_at_most_the_flush_bound(tmp_path: Path, target: int
     expected = _messages(reference)
     assert len(expected) > len(recovered)
     assert recovered == expected[: len(recovered)]
-    # ... and every message older than 0.5 s of clock time at the kill is among them.
-    old = [i for i, m in enumerate(expected[:written]) if m[1] <= clock_ns - FLUSH_INTERVAL_NS]
-    assert not old or old[-1] < len(recovered)
     # The reader sees the same messages in the broken file and says it is incomplete.
     recording = open_recording(broken)
     assert sum(1 for _ in recording.messages()) == len(recovered)
@@ -167,3 +187,73 @@ def test_killed_aeroexec_run_record_is_recoverable(tmp_path: Path, kill_after: i
     with open(fixed, "rb") as stream:
         attachments = {a.name: a.data for a in make_reader(stream).iter_attachments()}
     assert attachments["mission.py"] == mission.read_bytes()
+
+
+# -- live: the wall-clock bound --------------------------------------------------------------
+HOVER_MISSION = """\
+    api.executeBehavior("TAKE_OFF")
+    print("hovering", flush=True)
+    api.executeBehavior("KEEP_HOVERING", duration=120)
+    api.executeBehavior("LAND")
+"""
+
+
+@pytest.fixture
+def processes() -> Iterator[list[AeroexecProcess]]:
+    started: list[AeroexecProcess] = []
+    yield started
+    for process in started:
+        process.kill()
+
+
+@pytest.mark.parametrize("hover_s", [1.5, 4.0])
+def test_killed_fly_loses_at_most_half_a_second_of_wall_clock(
+    tmp_path: Path, processes: list[AeroexecProcess], hover_s: float
+) -> None:
+    port = free_udp_port()
+    broken = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, HOVER_MISSION)
+    flight = AeroexecProcess(
+        ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "--output", str(broken)]
+    )
+    processes.append(flight)
+    flight.wait_for("waiting for a heartbeat")
+    autopilot = AeroexecProcess(
+        [
+            *("mavsim", "--connect", f"udpout:127.0.0.1:{port}"),
+            *("--speed-factor", "5", "--heartbeat-hz", "4", "--duration", "60"),
+        ]
+    )
+    processes.append(autopilot)
+    flight.wait_for("hovering", timeout=30)
+    time.sleep(hover_s)
+    flight.popen.send_signal(signal.SIGKILL)
+    flight.popen.wait(10)
+    assert flight.popen.returncode == -signal.SIGKILL
+    autopilot.stop()
+
+    fixed = tmp_path / "fixed.mcap"
+    report = recover(broken, fixed)
+    assert not report.source_complete
+    recording = open_recording(fixed)
+    took_off = [
+        item.log_time_ns
+        for item in recording.records()
+        if getattr(item, "name", "") == "behavior_event"
+        and item.data.get("name") == "TAKE_OFF"
+        and item.data.get("code") == "GOAL_ACHIEVED"
+    ]
+    last = max(m.log_time_ns for m in recording.messages())
+    # The mission printed right after TAKE_OFF ended and then hovered `hover_s` until the
+    # kill, recording every tick: the file keeps all but the last 0.5 s (and 0.5 s of
+    # slack for a busy machine). By count alone, 99 messages here span 2-3 s.
+    assert len(took_off) == 1
+    assert last >= took_off[0] + round((hover_s - 2 * FLUSH_INTERVAL_NS / 1e9) * 1e9)
+    # Every chunk was closed by the bound: before its 100th message, or as soon as its
+    # messages spanned 0.5 s of the flight's clock (its last message the one that did).
+    chunks = _chunks(broken)
+    assert len(chunks) >= 3
+    for chunk in chunks:
+        assert len(chunk) <= FLUSH_MESSAGES
+        assert chunk[-2 if len(chunk) > 1 else -1] - chunk[0] < FLUSH_INTERVAL_NS
+    assert any(chunk[-1] - chunk[0] >= FLUSH_INTERVAL_NS for chunk in chunks)

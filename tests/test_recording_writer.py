@@ -21,7 +21,7 @@ from mcap.records import Schema
 from aeroexec.errors import RecordingError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.mission import APPENDIX_C, SessionConfig, simulate
-from aeroexec.recording import FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
+from aeroexec.recording import FLUSH_BYTES, FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
 from aeroexec.recording.scan import RecordScanner
 from aeroexec.recording.schemas import SCHEMAS, schema_document
 from aeroexec.recording.writer import LIBRARY
@@ -394,7 +394,7 @@ def test_separate_processes_with_different_hash_seeds_are_byte_identical(tmp_pat
 # -- flush bound --------------------------------------------------------------------------------
 def test_flush_after_100_messages(tmp_path: Path) -> None:
     path = tmp_path / "count.mcap"
-    recorder = Recorder(path, flush_interval_ns=10**18)
+    recorder = Recorder(path)
     for i in range(99):
         recorder.on_service_call(_nested(i))
     assert _readable_messages(path) == 0 and recorder.messages_flushed == 0
@@ -407,9 +407,10 @@ def test_flush_after_100_messages(tmp_path: Path) -> None:
     assert _readable_messages(path) == 250
 
 
-def test_flush_after_half_a_second_of_clock_time(tmp_path: Path) -> None:
+def test_live_flush_after_half_a_second_of_clock_time(tmp_path: Path) -> None:
+    # A live session's log time is the wall clock: its recorder keeps the time bound.
     path = tmp_path / "time.mcap"
-    recorder = Recorder(path)
+    recorder = Recorder(path, flush_interval_ns=FLUSH_INTERVAL_NS)
     state = {"velocity": [0, 0, 0], "yaw": 0.0, "battery": 1.0}
     # 0.0 .. 0.4 s: span 0.4 s, 11 messages (state + transform, and the scene at 0.0)
     for tick in range(5):
@@ -421,6 +422,42 @@ def test_flush_after_half_a_second_of_clock_time(tmp_path: Path) -> None:
     assert _readable_messages(path) == 12  # the state at 0.5 s is flushed; its transform follows
     recorder.close()
     assert _readable_messages(path) == 13
+
+
+def test_simulated_flush_by_count_and_size_only(tmp_path: Path) -> None:
+    # Without the live time bound: an hour of clock time in 99 messages stays in one
+    # chunk; the 100th message, or 4 MiB of data, closes it.
+    path = tmp_path / "sim.mcap"
+    recorder = Recorder(path)
+    for i in range(99):
+        recorder.on_topic(TopicRecord("log", {"message": str(i)}, i * 36 * 10**9))
+    assert _readable_messages(path) == 0 and recorder.messages_flushed == 0
+    recorder.on_topic(TopicRecord("log", {"message": "100th"}, 3600 * 10**9))
+    assert _readable_messages(path) == 100 and recorder.messages_flushed == 100
+    recorder.on_topic(TopicRecord("log", {"message": "x" * (FLUSH_BYTES // 2)}, 3601 * 10**9))
+    assert _readable_messages(path) == 100
+    recorder.on_topic(TopicRecord("log", {"message": "y" * (FLUSH_BYTES // 2)}, 3602 * 10**9))
+    assert _readable_messages(path) == 102 and recorder.messages_flushed == 102
+    recorder.close()
+
+
+def test_a_new_channel_keeps_the_chunk_and_its_count(tmp_path: Path) -> None:
+    # Pending messages are handed to mcap before a new channel's record (the file's
+    # order is the stream's), but the chunk stays open and the count goes on.
+    path = tmp_path / "channels.mcap"
+    recorder = Recorder(path)
+    for i in range(60):
+        recorder.on_topic(TopicRecord("log", {"message": str(i)}, i))
+    for i in range(39):
+        recorder.on_topic(TopicRecord(f"extra/{i}", {"i": i}, 60 + i))
+    assert _readable_messages(path) == 0
+    recorder.on_topic(TopicRecord("log", {"message": "100th"}, 99))
+    assert _readable_messages(path) == 100
+    recorder.close()
+    with open(path, "rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None
+    assert [(c.message_start_time, c.message_end_time) for c in summary.chunk_indexes] == [(0, 99)]
 
 
 def test_transform_only_when_the_pose_changed(tmp_path: Path) -> None:
@@ -469,9 +506,9 @@ def test_chunks_respect_the_flush_bound(session_file: Path) -> None:
     assert summary is not None and summary.statistics is not None
     chunks = summary.chunk_indexes
     assert chunks and all(c.compression == "lz4" for c in chunks)
-    assert len(chunks) >= summary.statistics.message_count / FLUSH_MESSAGES
-    for chunk in chunks:
-        assert chunk.message_end_time - chunk.message_start_time <= FLUSH_INTERVAL_NS
+    # A simulated session: a chunk per 100 messages, whatever clock time they span.
+    assert len(chunks) == -(-summary.statistics.message_count // FLUSH_MESSAGES)
+    assert max(c.message_end_time - c.message_start_time for c in chunks) > FLUSH_INTERVAL_NS
 
 
 def test_service_call_with_nan_is_still_valid_json(tmp_path: Path) -> None:

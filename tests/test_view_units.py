@@ -283,4 +283,6 @@ def test_text_rows() -> None:
         "- flying(self)",
         "DEBUG",
     )
+    replaced = {"op": "replace", "belief": "yaw(self, 90)", "replaced": "yaw(self, 0)"}
+    assert texts.belief_row(replaced) == ("+ yaw(self, 90) (- yaw(self, 0))", "DEBUG")
     assert texts.compact("x" * 500, 20).endswith("…") and len(texts.compact("x" * 500, 20)) == 20

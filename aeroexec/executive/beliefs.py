@@ -211,15 +211,19 @@ def _key(belief: Compound, multivalued: frozenset[str]) -> tuple[Any, ...]:
 
 
 class Beliefs:
-    """An ordered fact store. `on_change(op, text)` is told of every add and remove."""
+    """An ordered fact store. `on_change(op, text)` is told of every add and remove;
+    with `on_replace(old, new)`, an add that replaces a belief (same key: a vehicle's
+    new position) is told there once instead of as a remove and an add."""
 
     def __init__(
         self,
         on_change: Callable[[str, str], None] | None = None,
         multivalued: frozenset[str] = DEFAULT_MULTIVALUED,
+        on_replace: Callable[[str, str], None] | None = None,
     ) -> None:
         self._facts: dict[tuple[Any, ...], Compound] = {}
         self._on_change = on_change
+        self._on_replace = on_replace
         self.multivalued = multivalued
         #: Counts changes (every add and remove): equal counts, equal contents.
         self.version = 0
@@ -242,6 +246,11 @@ class Beliefs:
             return False
         if old is not None:
             del self._facts[key]
+            if self._on_replace is not None:
+                self._facts[key] = fact
+                self.version += 2  # a remove and an add, told as one
+                self._on_replace(render(old), render(fact))
+                return True
             self._notify("remove", old)
         self._facts[key] = fact
         self._notify("add", fact)

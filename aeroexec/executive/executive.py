@@ -99,7 +99,7 @@ class Executive:
         for observer in observers:
             self.bus.attach(observer)
         self.vehicle: Vehicle = vehicle if vehicle is not None else _default_vehicle()
-        self.beliefs = Beliefs(self._belief_changed)
+        self.beliefs = Beliefs(self._belief_changed, on_replace=self._belief_replaced)
         # Bound once: the feed runs every tick.
         self._update_beliefs = update_beliefs
         #: (vehicle state, belief store version) after the last feed: fed again with the
@@ -218,6 +218,11 @@ class Executive:
 
     def _belief_changed(self, op: str, belief: str) -> None:
         self.bus.publish("beliefs", lambda: {"op": op, "belief": belief})
+
+    def _belief_replaced(self, old: str, new: str) -> None:
+        # One message, not a remove and an add: most belief changes are the vehicle
+        # feed's new position (or yaw, or charge) replacing the old one.
+        self.bus.publish("beliefs", lambda: {"op": "replace", "belief": new, "replaced": old})
 
     def _feed_beliefs(self) -> None:
         state = self.vehicle.state()

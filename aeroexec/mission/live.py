@@ -237,6 +237,7 @@ def fly(
             observers,
             code.records,
             start=vehicle.state(),
+            live=clock.kind == "wall",
         )
         executive = Executive(
             catalog,

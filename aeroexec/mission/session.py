@@ -144,16 +144,21 @@ def session_observers(
     records: Mapping[str, Mapping[str, str]] | None = None,
     world: World | None = None,
     start: VehicleState | None = None,
+    *,
+    live: bool = False,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
     recorder when one is asked for (the caller closes it). `world`: what the vehicle
     flies in, drawn in the recording's 3D scene; `start`: the vehicle's state the session
-    starts from, whose pose places the vehicle in that scene from the first instant."""
+    starts from, whose pose places the vehicle in that scene from the first instant.
+    `live`: the session runs on the wall clock (a flight), so its recording also keeps
+    the time flush bound (a crash loses at most 0.5 s of it); a simulated session's is
+    bounded by message count and size only (docs/recording.md)."""
     activity = ActivityLog()
     everyone: list[BusObserver] = [activity, *observers]
     recorder = None
     if record is not None:
-        from aeroexec.recording import Recorder
+        from aeroexec.recording import FLUSH_INTERVAL_NS, Recorder
 
         recorder = Recorder(
             record,
@@ -163,6 +168,7 @@ def session_observers(
             records=records,
             world=world,
             start_pose=(*start.position, start.yaw) if start is not None else None,
+            flush_interval_ns=FLUSH_INTERVAL_NS if live else None,
         )
         everyone.append(recorder)
     return activity, everyone, recorder

@@ -1,7 +1,7 @@
 """MCAP recording of executive sessions: the aeroexec profile (see docs/recording.md).
 
 - `Recorder` (writer.py): the bus observer that writes a session, deterministic and
-  crash-safe (flush bound: 100 messages or 0.5 s of clock time);
+  crash-safe (flush bound: 100 messages or 4 MiB; live flights also 0.5 s of wall clock);
 - `open_recording` (reader.py): typed, streaming reading of a recording, complete or not;
 - `recover` (recover.py): salvage an unfinished or damaged file into a complete one;
 - `recording_info` (info.py): what `aeroexec info` prints;
@@ -22,9 +22,10 @@ from aeroexec.recording.reader import (
 )
 from aeroexec.recording.recover import RecoverReport, recover
 from aeroexec.recording.schemas import PROFILE
-from aeroexec.recording.writer import FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
+from aeroexec.recording.writer import FLUSH_BYTES, FLUSH_INTERVAL_NS, FLUSH_MESSAGES, Recorder
 
 __all__ = [
+    "FLUSH_BYTES",
     "FLUSH_INTERVAL_NS",
     "FLUSH_MESSAGES",
     "PROFILE",

@@ -179,8 +179,13 @@ SCHEMAS: dict[str, dict[str, Any]] = {
     ),
     BELIEF_CHANGE: _object(
         BELIEF_CHANGE,
-        "A change of the belief store: op is the change (add, remove, ...).",
-        {"op": {"type": "string"}, "belief": {"type": "string"}},
+        "A change of the belief store: op is add, remove or replace (belief replaces "
+        "replaced, a belief with the same key: one message for a remove and an add).",
+        {
+            "op": {"type": "string"},
+            "belief": {"type": "string"},
+            "replaced": {"type": "string"},
+        },
         ["op", "belief"],
     ),
     MISSION_COMMAND: _object(

@@ -29,13 +29,27 @@ zstd on the small chunks the flush bound makes). Same inputs, same file, byte fo
 
 **Crash-safe.** FLUSH BOUND: after a message is written, the current chunk is closed and
 handed to the operating system when it holds `flush_messages` (default 100) messages or
-when its messages span `flush_interval_ns` (default 0.5 s) of clock time, whichever comes
-first. A process killed with SIGKILL therefore loses at most the last 99 messages and at
-most 0.5 s of clock time; everything before is in complete chunks that `aeroexec recover`
-(or the reader) reads from a file with no footer. The header, the metadata and the
-attachments are on disk before the first message. `close()` (also at normal interpreter
-exit, if the owner forgot) flushes and writes the summary and footer. The data reaches
-the kernel, not necessarily the disk: a power cut is not covered (no fsync per chunk).
+`flush_bytes` (default 4 MiB) of message data, whichever comes first; a live session
+(`fly`, whose log time is the wall clock) also gives `flush_interval_ns` (0.5 s), and
+then a chunk is closed as soon as its messages span that much log time. A process killed
+with SIGKILL therefore loses at most the last 99 messages (and, live, never a message
+older than 0.5 s of wall-clock time before the last one written); everything before is in
+complete chunks that `aeroexec recover` (or the reader) reads from a file with no footer.
+A simulated session has no time bound: 0.5 s of simulated time passes in well under a
+millisecond, so it protects nothing, and a deterministic run that a crash cut short can
+be made again exactly. The header, the metadata and the attachments are on disk before
+the first message. `close()` (also at normal interpreter exit, if the owner forgot)
+flushes and writes the summary and footer. The data reaches the kernel, not necessarily
+the disk: a power cut is not covered (no fsync per chunk).
+
+**Encoded once, handed over in bursts.** Each message is encoded once, straight from the
+bus record, and kept as the very arguments of mcap's `Writer.add_message` until the
+flush bound closes the chunk; then the chunk's messages go to the writer in one tight
+loop and the chunk is flushed. A message is on disk no sooner and no later than if it
+had been handed over at once (a chunk becomes durable only when it is closed), the
+writer sees the same calls in the same order (a new channel first hands over what came
+before it), so the file is the same, byte for byte; but mcap's per-message work runs
+hot in cache instead of between the executive's, about a third cheaper.
 """
 
 from __future__ import annotations
@@ -79,7 +93,9 @@ interrupts.critical_file(__file__)
 
 #: Flush bound, in messages (see the module docstring).
 FLUSH_MESSAGES = 100
-#: Flush bound, in clock nanoseconds (see the module docstring).
+#: Flush bound, in bytes of message data (mcap's own chunk size, see the module docstring).
+FLUSH_BYTES = 4 * 1024 * 1024
+#: Flush bound of a live session, in log-time (there: wall-clock) nanoseconds.
 FLUSH_INTERVAL_NS = 500_000_000
 #: The metadata record's name.
 METADATA_NAME = "aeroexec"
@@ -232,7 +248,8 @@ def _media_type(name: str) -> str:
 
 class Recorder:
     """A `BusObserver` writing the aeroexec MCAP profile (see the module docstring for
-    the channels, determinism and the flush bound: 100 messages or 0.5 s of clock time).
+    the channels, determinism and the flush bound: 100 messages or 4 MiB; live sessions
+    also give `flush_interval_ns`, 0.5 s of wall-clock log time).
     """
 
     def __init__(
@@ -244,12 +261,13 @@ class Recorder:
         *,
         records: Mapping[str, Mapping[str, str]] | None = None,
         flush_messages: int = FLUSH_MESSAGES,
-        flush_interval_ns: int = FLUSH_INTERVAL_NS,
+        flush_bytes: int = FLUSH_BYTES,
+        flush_interval_ns: int | None = None,
         compression: str = "lz4",
         world: World | None = None,
         start_pose: Pose | None = None,
     ) -> None:
-        if flush_messages < 1 or flush_interval_ns < 0:
+        if flush_messages < 1 or flush_bytes < 1 or (flush_interval_ns or 0) < 0:
             raise ValueError("flush bounds must be positive")
         if compression not in _COMPRESSIONS:
             raise ValueError(f"compression must be one of {sorted(_COMPRESSIONS)}")
@@ -257,6 +275,7 @@ class Recorder:
         self.drone = drone.strip("/")
         self._prefix = f"/{self.drone}/"
         self.flush_messages = flush_messages
+        self.flush_bytes = flush_bytes
         self.flush_interval_ns = flush_interval_ns
         try:
             # `-o out/flight.mcap` should just work, as an output path does in make.
@@ -273,10 +292,18 @@ class Recorder:
         self._last_ns: int | None = None
         self._writer = Writer(
             self._stream,
-            chunk_size=4 * 1024 * 1024,
+            chunk_size=FLUSH_BYTES,
             compression=_COMPRESSIONS[compression],
         )
         self._add = self._writer.add_message
+        #: The messages of the chunk in progress, as `add_message`'s arguments
+        #: (channel, log time, data, publish time, sequence), not yet handed to the writer.
+        self._pending: list[tuple[int, int, bytes, int, int]] = []
+        #: Since the last flush (a new channel hands the pending messages over earlier):
+        #: how many messages, their bytes, the log time of the first.
+        self._unflushed = 0
+        self._unflushed_bytes = 0
+        self._unflushed_since = 0
         self._schemas: dict[str, int] = {}
         #: service -> channel id, topic (inside the namespace) -> channel id
         self._services: dict[str, int] = {}
@@ -284,10 +311,16 @@ class Recorder:
         #: The messages for Foxglove's panels. With the start pose known, their start
         #: comes before the session's first message; without, with the first state.
         self._panels = PanelFeed(self.drone, self._derived, world, start_pose)
+        #: What the panels derive from, by topic.
+        self._panel_inputs: dict[str, Callable[[Mapping[str, Any], int], None]] = {
+            "vehicle/state": self._panels.vehicle_state,
+            "list_of_active_capabilities": self._panels.capabilities,
+        }
+        #: topic -> (channel, what the panels derive from it): the topics written as
+        #: published (not `log` or `mission/command`), once their channel exists.
+        self._routes: dict[str, tuple[int, Callable[[Mapping[str, Any], int], None] | None]] = {}
         self._await_start = start_pose is not None
         self._count = 0
-        self._pending = 0
-        self._pending_since = 0
         self._flushed = 0
         self._closed = False
         self._forget_finisher: Callable[[], None] = lambda: None
@@ -314,12 +347,32 @@ class Recorder:
             channel = self._services[service] = self._channel(self._prefix + service, SERVICE_CALL)
         data = call_message(record)
         log_time_ns = record.log_time_ns
-        self._write(channel, log_time_ns, encode_json(data))
+        try:
+            encoded = _ORJSON(data, default=_default)
+        except _ORJSON_ERROR:
+            encoded = encode_json(data)
+        self._write(channel, log_time_ns, encoded)
         if record.parent_seq is None:
             self._panels.call(data, log_time_ns)
 
     def on_topic(self, record: TopicRecord) -> None:
-        self.write_topic(record.topic, record.data, record.log_time_ns)
+        # Most of a session's messages take this path (vehicle states, beliefs): a topic
+        # already seen, written as published, is encoded and written right here.
+        topic = record.topic
+        route = self._routes.get(topic)
+        if route is None:
+            self.write_topic(topic, record.data, record.log_time_ns)
+            return
+        channel, then = route
+        data = record.data
+        log_time_ns = record.log_time_ns
+        try:
+            encoded = _ORJSON(data, default=_default)
+        except _ORJSON_ERROR:
+            encoded = encode_json(data)
+        self._write(channel, log_time_ns, encoded)
+        if then is not None:
+            then(data, log_time_ns)
 
     # -- public --------------------------------------------------------------------------
     def write_topic(self, topic: str, data: Mapping[str, Any], log_time_ns: int) -> None:
@@ -335,6 +388,8 @@ class Recorder:
             data = log_message(data, log_time_ns)
         elif topic == "mission/command":
             data = without_nulls(data)
+        elif topic not in self._routes:
+            self._routes[topic] = (channel, self._panel_inputs.get(topic))
         self._write(channel, log_time_ns, encode_json(data))
         if topic == "vehicle/state":
             self._panels.vehicle_state(data, log_time_ns)
@@ -343,7 +398,7 @@ class Recorder:
 
     @property
     def messages_written(self) -> int:
-        """Messages handed to the MCAP writer so far."""
+        """Messages written so far (in the file once flushed)."""
         return self._count
 
     @property
@@ -358,8 +413,7 @@ class Recorder:
     def flush(self) -> None:
         """Close the current chunk and hand everything written so far to the OS."""
         self._check_open()
-        self._guard(self._writer.flush)
-        self._pending = 0
+        self._guard(self._flush)
         self._flushed = self._count
         self._mark_good()
 
@@ -419,7 +473,11 @@ class Recorder:
             channel = self._topics[topic] = self._channel(
                 self._prefix + topic, schema_name_for_topic(topic)
             )
-        self._write(channel, log_time_ns, encode_json(data))
+        try:
+            encoded = _ORJSON(data, default=_default)
+        except _ORJSON_ERROR:
+            encoded = encode_json(data)
+        self._write(channel, log_time_ns, encoded)
 
     def _begin_panels(self, log_time_ns: int) -> None:
         """The panels' start, at the session's first log time."""
@@ -452,6 +510,8 @@ class Recorder:
         if self._lost:
             return 0
         self._check_open()
+        # The channel record goes where it always went: after the messages before it.
+        self._guard(self._hand_over)
         schema = self._schemas.get(schema_name)
         if schema is None:
             definition = schema_for(schema_name)
@@ -468,25 +528,41 @@ class Recorder:
             if self._lost:
                 return  # already reported (OutputLost); the session is unwinding
             self._check_open()
-        pending = self._pending
-        if not pending:
-            self._pending_since = log_time_ns
         count = self._count
-        try:
-            # (channel_id, log_time, data, publish_time, sequence); sequence is a uint32
-            self._add(channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF)
-        except OSError as exc:
-            self._lose(exc)
+        # add_message's arguments; the sequence is a uint32
+        self._pending.append((channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF))
         self._count = count + 1
-        self._last_ns = log_time_ns
-        self._pending = pending = pending + 1
+        unflushed = self._unflushed
+        if not unflushed:
+            self._unflushed_since = log_time_ns
+        self._unflushed = unflushed = unflushed + 1
+        self._unflushed_bytes = size = self._unflushed_bytes + len(data)
+        interval = self.flush_interval_ns
         if (
-            pending >= self.flush_messages
-            or log_time_ns - self._pending_since >= self.flush_interval_ns
+            unflushed >= self.flush_messages
+            or size >= self.flush_bytes
+            or (interval is not None and log_time_ns - self._unflushed_since >= interval)
         ):
             self.flush()
 
+    def _hand_over(self) -> None:
+        """The pending messages to the writer (into its chunk in progress), in order."""
+        pending = self._pending
+        if not pending:
+            return
+        add = self._add
+        for message in pending:
+            add(*message)
+        self._last_ns = pending[-1][1]
+        pending.clear()
+
+    def _flush(self) -> None:
+        self._hand_over()
+        self._writer.flush()
+        self._unflushed = self._unflushed_bytes = 0
+
     def _finish(self) -> None:
+        self._hand_over()
         self._writer.finish()
         self._stream.flush()  # here, where a full disk is caught, not in close()
 

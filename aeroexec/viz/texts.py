@@ -111,6 +111,8 @@ def belief_row(data: Any) -> tuple[str, str]:
         return compact(data), DEBUG
     op = str(data.get("op", "?"))
     belief = str(data.get("belief", ""))
+    if op == "replace":
+        return f"+ {belief} (- {data.get('replaced', '')})", DEBUG
     sign = {"add": "+", "remove": "-"}.get(op, op)
     return f"{sign} {belief}", DEBUG
 
