@@ -71,10 +71,11 @@ def explore_wall(recording: Path, out: Path) -> tuple[float, int]:
 
 def plain_run(recording: Path, out: Path) -> None:
     """One run's floor: the recording replayed, recorded and checked, nothing injected."""
-    checked(recording, ReplayOptions(trust_recording=True, output=str(out), properties=SAFETY))
+    options = ReplayOptions(trust_recording=True, output=str(out), properties=SAFETY)
+    checked_replay(recording, options)
 
 
-def checked(recording: Path, options: ReplayOptions) -> ReplayResult:
+def checked_replay(recording: Path, options: ReplayOptions) -> ReplayResult:
     """A replay checked against its properties, as replay's executors run one."""
     return run_task(ReplayTask(0, str(recording), str(recording), options))
 
@@ -202,7 +203,7 @@ def main() -> int:
                 properties=SAFETY,
             )
             for _ in range(max(1, args.reproduce)):
-                again = checked(recording, options)
+                again = checked_replay(recording, options)
                 total += 1
                 data = (directory / "again.mcap").read_bytes()
                 same += data == original and again.violated == run.violated
