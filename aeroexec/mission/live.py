@@ -46,6 +46,7 @@ from aeroexec.mission.session import (
     start_observing,
 )
 from aeroexec.plugins.discovery import BehaviorSet
+from aeroexec.recording.tap import RecordTap
 from aeroexec.vehicles.base import VehicleCommandError
 from aeroexec.vehicles.mavlink.codec import signing_key
 from aeroexec.vehicles.mavlink.endpoint import (
@@ -92,6 +93,8 @@ class FlightConfig:
     baud: int = DEFAULT_BAUD
     #: Fly although the autopilot's GCS failsafe is off (one warning instead of a refusal).
     allow_no_gcs_failsafe: bool = False
+    #: Sees the recording as it is written (a live view); recorded even without `record`.
+    tap: RecordTap | None = None
 
     def vehicle_config(self) -> MavlinkConfig:
         """The vehicle's configuration; `MavlinkError` for values that cannot work."""
@@ -237,6 +240,7 @@ def fly(
             observers,
             code.records,
             start=vehicle.state(),
+            tap=config.tap,
         )
         executive = Executive(
             catalog,

@@ -7,6 +7,7 @@ checkable.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -19,7 +20,7 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import NS_PER_S, SimClock
+from aeroexec.executive.clock import NS_PER_S, PacedSimClock, SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import Interrupted
@@ -41,6 +42,7 @@ from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
+    from aeroexec.recording.tap import RecordTap
     from aeroexec.vehicles.world import World
 
 
@@ -62,6 +64,11 @@ class SessionConfig:
     allow_unimplemented: bool = False
     #: The session ends when the simulated clock reaches this (None: never).
     max_sim_time_s: float | None = DEFAULT_MAX_SIM_TIME_S
+    #: Sees the recording as it is written (a live view); it is recorded even without
+    #: `record` (to no file).
+    tap: RecordTap | None = None
+    #: Keep the simulated clock to the wall clock at this factor (None: as fast as it runs).
+    speed: float | None = None
 
 
 @dataclass(frozen=True)
@@ -107,25 +114,29 @@ def session_observers(
     records: Mapping[str, Mapping[str, str]] | None = None,
     world: World | None = None,
     start: VehicleState | None = None,
+    tap: RecordTap | None = None,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
     recorder when one is asked for (the caller closes it). `world`: what the vehicle
     flies in, drawn in the recording's 3D scene; `start`: the vehicle's state the session
-    starts from, whose pose places the vehicle in that scene from the first instant."""
+    starts from, whose pose places the vehicle in that scene from the first instant;
+    `tap`: sees the recording as it is written (without `record`, the session is
+    recorded to no file for it)."""
     activity = ActivityLog()
     everyone: list[BusObserver] = [activity, *observers]
     recorder = None
-    if record is not None:
+    if record is not None or tap is not None:
         from aeroexec.recording import Recorder
 
         recorder = Recorder(
-            record,
+            record if record is not None else os.devnull,
             drone=drone,
             metadata=metadata,
             attachments=attachments,
             records=records,
             world=world,
             start_pose=(*start.position, start.yaw) if start is not None else None,
+            tap=tap,
         )
         everyone.append(recorder)
     return activity, everyone, recorder
@@ -222,12 +233,13 @@ def simulate(
         code.records,
         vehicle.world,
         vehicle.state(),
+        config.tap,
     )
     with recording_session(recorder, vehicle):
         executive = Executive(
             catalog,
             vehicle=vehicle,
-            clock=SimClock(),
+            clock=SimClock() if config.speed is None else PacedSimClock(speed=config.speed),
             library=code.library,
             observers=all_observers,
             drone=config.drone,
@@ -286,7 +298,8 @@ def recording_session(recorder: Recorder | None, vehicle: Vehicle | None = None)
         if recorder is not None and not recorder.closed:
             fault = vehicle.state().fault if vehicle is not None else ""
             end_recording(recorder, "interrupted", stop.name, fault)
-            stop.notes.append(finalized_note(recorder))
+            if str(recorder.path) != os.devnull:  # recorded for a live view only
+                stop.notes.append(finalized_note(recorder))
         raise
     finally:
         if recorder is not None and not recorder.closed:
