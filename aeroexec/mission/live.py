@@ -40,6 +40,7 @@ from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission,
 from aeroexec.mission.session import (
     SessionResult,
     end_observing,
+    mission_over,
     session_code,
     session_observers,
     stand_in_metadata,
@@ -270,6 +271,7 @@ def fly(
             # vehicle gets its ending before the exception goes on.
             stopped = exc
             how = exc.name if isinstance(exc, Interrupted) else type(exc).__name__
+        mission_over(observers, executive, outcome.ending is ScriptEnding.STOPPED)
         # When and how the mission ended: replay stops a mission stopped here at the
         # same tick, and tells the ending's commands from the mission's.
         executive.bus.publish(

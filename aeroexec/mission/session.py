@@ -249,6 +249,7 @@ def simulate(
         start_observing(observers, executive)
         api = MissionAPI(executive)
         outcome = run_script(script, api)
+        mission_over(observers, executive, outcome.ending is Ending.STOPPED)
         assurance: list[str] = []
         if outcome.ending is Ending.STOPPED and executive.stop_request is not None:
             start = vehicle.world.start
@@ -277,6 +278,18 @@ def start_observing(observers: Iterable[BusObserver], executive: Executive) -> N
         started = getattr(observer, "session_started", None)
         if started is not None:
             started(executive)
+
+
+def mission_over(observers: Iterable[BusObserver], executive: Executive, stopped: bool) -> None:
+    """The mission script is over, the ending comes: observers with a `mission_ended()`
+    method hear it (a live view takes no more aborts). A stop asked for now, when the
+    mission was not stopped, is dropped: the ending steps on."""
+    for observer in observers:
+        ended = getattr(observer, "mission_ended", None)
+        if ended is not None:
+            ended()
+    if not stopped:
+        executive.stop_request = None
 
 
 def end_observing(observers: Iterable[BusObserver], executive: Executive) -> None:

@@ -26,6 +26,8 @@ Both listen on 127.0.0.1 unless told otherwise (`--allow-remote`).
 from __future__ import annotations
 
 import contextlib
+import logging
+import re
 import socket
 import threading
 import time
@@ -59,6 +61,14 @@ DEFAULT_FOXGLOVE_PORT = 8765
 DEFAULT_RERUN_PORT = 9876
 #: How long a new channel's messages wait for a viewer to subscribe (s).
 HOLD_S = 1.0
+#: How many times a channel whose subscription the server refused is advertised again.
+READVERTISE = 5
+#: The SDK's logger, and its line, for a subscription it refused.
+SDK_CLIENT_LOGGER = "foxglove.websocket.connected_client"
+_REFUSED = re.compile(r"attempted to subscribe to unknown channel: (\d+)")
+#: Messages queued per viewer before the oldest are dropped (the SDK's default is 1024:
+#: a viewer subscribing to held channels gets them in one burst).
+BACKLOG = 1 << 16
 #: After the session, how long the servers stay up for the last messages to leave (s).
 LINGER_S = 0.3
 #: How often the Rerun rows held by the column writer are sent (s of wall time).
@@ -130,6 +140,12 @@ class FoxgloveLive(ServerListener):
         #: server channel ids a viewer has subscribed to (written by the server's thread)
         self._subscribed: set[int] = set()
         self._viewer = threading.Event()
+        #: server channel ids whose subscription the server refused (`_readvertise`)
+        self._refused: set[int] = set()
+        #: recording channel id -> how many times it was advertised again
+        self._again: dict[int, int] = {}
+        self._log = logging.getLogger(SDK_CLIENT_LOGGER)
+        self._log.addFilter(self._refusal)
         self._parameters: dict[str, str] = {}
         service = foxglove.Service(
             ABORT_SERVICE,
@@ -150,6 +166,7 @@ class FoxgloveLive(ServerListener):
                 services=[service],
                 server_listener=self,
                 context=self._context,
+                message_backlog_size=BACKLOG,
             )
         except Exception as exc:  # the SDK raises its own RuntimeError kinds
             raise ViewerError(
@@ -185,7 +202,7 @@ class FoxgloveLive(ServerListener):
             self._since[channel.id] = time.monotonic()
 
     def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
-        if self._pending:
+        if self._pending or self._refused:
             self._release(time.monotonic())
             held = self._pending.get(channel_id)
             if held is not None:
@@ -201,7 +218,7 @@ class FoxgloveLive(ServerListener):
         """Until a viewer subscribes (a signal ends the wait), then a moment for the rest
         of its subscriptions, which come in one request."""
         while not self._viewer.wait(0.05):
-            interrupts.check_interrupts()
+            interrupts.check()
         time.sleep(0.1)
         self._release(time.monotonic())
 
@@ -218,6 +235,11 @@ class FoxgloveLive(ServerListener):
 
     def _release(self, now: float) -> None:
         with self._lock:
+            refused, self._refused = self._refused, set()
+            for served_id in refused:
+                channel_id = self._recorded.get(served_id)
+                if channel_id is not None:
+                    self._readvertise(channel_id, now)
             subscribed = self._subscribed
             viewer = self._viewer.is_set()
             for channel_id in list(self._pending):
@@ -227,6 +249,36 @@ class FoxgloveLive(ServerListener):
                         served.base.log(data, log_time_ns)
                 elif (viewer or not self._wait) and now - self._since[channel_id] > HOLD_S:
                     del self._pending[channel_id]  # no one wants it: live from now on
+
+    def _readvertise(self, channel_id: int, now: float) -> None:
+        """foxglove-sdk 0.30's server refuses some subscriptions that come right after a
+        channel's advertisement ("unknown channel"), a few in a hundred, and a viewer does
+        not ask again. The channel is advertised anew (and its messages held until the
+        viewer subscribes again), up to `READVERTISE` times."""
+        tries = self._again.get(channel_id, 0)
+        if tries >= READVERTISE:
+            return
+        self._again[channel_id] = tries + 1
+        served = self._channels[channel_id]
+        topic, schema, encoding = served.topic(), served.schema(), served.message_encoding
+        served.close()  # first: the server advertises no second channel of a topic
+        again = foxglove.Channel(
+            topic, schema=schema, message_encoding=encoding, context=self._context
+        )
+        del self._recorded[served.id()]
+        self._channels[channel_id] = again
+        self._recorded[again.id()] = channel_id
+        self._pending.setdefault(channel_id, [])
+        self._since[channel_id] = now
+
+    def _refusal(self, record: logging.LogRecord) -> bool:
+        """The SDK's log of a refused subscription: the channel is advertised again (on
+        the session's thread), and the line is not printed (it is handled)."""
+        found = _REFUSED.search(record.getMessage())
+        if found is None:
+            return True
+        self._refused.add(int(found[1]))
+        return False
 
     # -- ServerListener (the server's thread) ---------------------------------------------
     def on_subscribe(self, client: Client, channel: ChannelView) -> None:
@@ -265,6 +317,7 @@ class FoxgloveLive(ServerListener):
         if self._viewer.is_set():
             time.sleep(LINGER_S)
         self.server.stop()
+        self._log.removeFilter(self._refusal)
 
 
 class RerunLive:
@@ -353,7 +406,9 @@ class LiveView:
     def __init__(self, options: LiveOptions, label: str = "live") -> None:
         self.options = options
         self._executive: Executive | None = None
-        self._ended = False
+        #: The mission script runs (an abort can stop it).
+        self._mission = False
+        self._abort_lock = threading.Lock()
         self.foxglove = FoxgloveLive(options, self._request_abort)
         self.rerun: RerunLive | None = None
         try:
@@ -387,7 +442,7 @@ class LiveView:
             self.rerun.message_written(channel_id, log_time_ns, data)
 
     def recording_closed(self) -> None:
-        self._ended = True
+        self.mission_ended()
         self.foxglove.recording_closed()
         if self.rerun is not None:
             self.rerun.recording_closed()
@@ -403,18 +458,29 @@ class LiveView:
         """The executive a viewer's abort stops; with `wait_viewer`, the mission waits
         here for a viewer."""
         self._executive = executive
+        self._mission = True
         if self.options.wait_viewer:
             self.foxglove.wait_for_viewer()
 
+    def mission_ended(self) -> None:
+        """The mission is over (its ending may still run): nothing left to abort."""
+        with self._abort_lock:
+            self._mission = False
+
     def session_ending(self, executive: Executive) -> None:
-        self._ended = True
+        self.mission_ended()
 
     def _request_abort(self) -> dict[str, object]:
-        executive = self._executive
-        if executive is None or self._ended:
-            return {"ok": False, "error": "no mission is running"}
-        action = self.options.abort_action
-        executive.request_stop("aborted by a live viewer", action)
+        """A viewer's `/abort_mission` (on the server's thread): the mission is stopped at
+        its next tick, and the session's ending (landing; `fly`: --on-exit) follows. Only
+        the first call aborts; once the mission is over there is nothing to abort."""
+        with self._abort_lock:
+            executive = self._executive
+            if executive is None or not self._mission:
+                return {"ok": False, "error": "no mission is running"}
+            self._mission = False
+            action = self.options.abort_action
+            executive.request_stop("aborted by a live viewer", action)
         return {"ok": True, "action": action}
 
     def close(self) -> None:
