@@ -260,7 +260,7 @@ def test_the_servers_listen_on_loopback_only(tmp_path: Path, procs: list[Aeroexe
     ("args", "message"),
     [
         (["--port", "0"], "--port, --rerun-port and --wait-viewer are for --live: add --live"),
-        (["--wait-viewer"], "are for --live: add --live"),
+        (["--wait-viewer"], "--port, --rerun-port and --wait-viewer are for --live: add --live"),
         (["--allow-remote"], "--allow-remote is for --live: add --live"),
         (["--speed", "0"], "invalid value for --speed: 0: give a factor above 0"),
     ],
