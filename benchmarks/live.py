@@ -1,0 +1,232 @@
+"""Benchmark: the live view (`fly --live`, issue 28) on a real-time flight against mavsim.
+
+Three figures, medians of `--runs` flights of the thesis' Appendix C against `aeroexec
+mavsim` at speed 1 (real time, every telemetry stream at its full rate):
+
+* **latency**: from a message handed to the live view (the recorder's tap, timed with
+  the system's monotonic clock) to the same message received by a foxglove.sdk.v1
+  client in another process on loopback (the same clock); p99 of each flight.
+  Baseline: foxglove-sdk alone, a bare server logging 100 messages a second to the
+  same client (the floor any server built on the SDK sits on). Target: p99 <= 20 ms.
+* **cost**: CPU time (user + system, `wait4` of the `fly` process alone) of `fly
+  --live` with a client connected against the same flight without `--live`. Target:
+  <= 1.15x.
+* **parity**: the share of the recording's messages the client received with the same
+  topic, log time and bytes. Target: 100 %.
+
+    .venv/bin/python benchmarks/live.py [--runs 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "tests"))
+
+from figures import Figure  # noqa: E402
+from foxglove_client import FoxgloveClient  # noqa: E402
+from live_helpers import free_tcp_port, free_udp_port  # noqa: E402
+
+from aeroexec.mission.live import FlightConfig, fly  # noqa: E402
+from aeroexec.mission.paths import APPENDIX_C  # noqa: E402
+from aeroexec.recording import open_recording  # noqa: E402
+from aeroexec.viz.live import LiveOptions, LiveView  # noqa: E402
+
+LATENCY_TARGET_S = 0.020
+COST_TARGET = 1.15
+
+
+def client_main(url: str, out: str) -> None:
+    """The client process: every message with its arrival time, written when the server
+    closes the connection."""
+    client = FoxgloveClient(url).start()
+    client.wait_closed(600)
+    rows = [[m.topic, m.log_time_ns, m.data.hex(), m.arrived_ns] for m in client.messages]
+    Path(out).write_text(json.dumps(rows))
+
+
+def start_client(url: str, out: Path) -> subprocess.Popen[bytes]:
+    return subprocess.Popen([sys.executable, __file__, "--client", url, str(out)])
+
+
+def start_mavsim(port: int) -> subprocess.Popen[bytes]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "aeroexec", "mavsim", "--connect", f"udpout:127.0.0.1:{port}"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+
+
+def stop(proc: subprocess.Popen[bytes]) -> None:
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def p99(values: list[float]) -> float:
+    return statistics.quantiles(values, n=100)[98]
+
+
+class Timed(LiveView):
+    """The live view, noting when each message is handed to it."""
+
+    def __init__(self, options: LiveOptions) -> None:
+        super().__init__(options)
+        self.logged: dict[tuple[int, int, bytes], int] = {}
+        self.topics: dict[int, str] = {}
+
+    def channel_added(self, channel):  # type: ignore[no-untyped-def]
+        self.topics[channel.id] = channel.topic
+        super().channel_added(channel)
+
+    def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
+        self.logged.setdefault((channel_id, log_time_ns, data), time.monotonic_ns())
+        super().message_written(channel_id, log_time_ns, data)
+
+
+def latency_run(workdir: Path, index: int) -> tuple[float, float, int]:
+    """One flight in this process, served live to a client process: (p99 latency s,
+    parity, messages)."""
+    port = free_udp_port()
+    record = workdir / f"latency{index}.mcap"
+    out = workdir / f"latency{index}.json"
+    view = Timed(LiveOptions(port=0, rerun_port=free_tcp_port(), wait_viewer=True))
+    client = start_client(view.urls[0], out)
+    sim = start_mavsim(port)
+    try:
+        config = FlightConfig(
+            mission=APPENDIX_C, connect=f"udpin:127.0.0.1:{port}", record=record, tap=view
+        )
+        result = fly(config, observers=[view])
+        assert result.outcome.returned, result.outcome.error
+    finally:
+        view.close()
+        stop(sim)
+    client.wait(60)
+    received = json.loads(out.read_text())
+    topics = view.topics
+    logged = {(topics[c], t, d): ns for (c, t, d), ns in view.logged.items()}
+    latencies = [
+        (arrived - logged[(topic, t, bytes.fromhex(data))]) / 1e9
+        for topic, t, data, arrived in received
+    ]
+    expected = collections.Counter(
+        (m.channel.topic, m.log_time_ns, m.data) for m in open_recording(record).messages()
+    )
+    got = collections.Counter((topic, t, bytes.fromhex(data)) for topic, t, data, _ in received)
+    same = sum((expected & got).values())  # received as recorded; an extra one counts too
+    parity = same / max(sum(expected.values()), sum(got.values()))
+    return p99(latencies), parity, sum(expected.values())
+
+
+def sdk_floor(workdir: Path) -> float:
+    """p99 latency of foxglove-sdk alone: a bare server logging 100 messages a second."""
+    import foxglove
+
+    context = foxglove.Context()
+    server = foxglove.start_server(host="127.0.0.1", port=0, context=context)
+    channel = foxglove.Channel("/floor", message_encoding="json", context=context)
+    out = workdir / "floor.json"
+    client = start_client(f"ws://127.0.0.1:{server.port}", out)
+    time.sleep(2.0)  # connected and subscribed
+    sent: dict[int, int] = {}
+    for i in range(1000):
+        data = json.dumps({"i": i, "pad": "x" * 200}).encode()
+        sent[i] = time.monotonic_ns()
+        channel.log(data, log_time=i)
+        time.sleep(0.01)
+    time.sleep(0.3)
+    server.stop()
+    client.wait(60)
+    received = json.loads(out.read_text())
+    return p99([(arrived - sent[t]) / 1e9 for _, t, _, arrived in received])
+
+
+def cpu_run(workdir: Path, index: int, live: bool) -> float:
+    """CPU seconds of one `fly` process (alone: wait4), with or without --live."""
+    port = free_udp_port()
+    args = [
+        sys.executable, "-m", "aeroexec", "fly", str(APPENDIX_C), "-q",
+        "--connect", f"udpin:127.0.0.1:{port}", "-o", str(workdir / f"cpu{index}{live}.mcap"),
+    ]  # fmt: skip
+    if live:
+        args += ["--live", "--port", str(free_tcp_port()), "--rerun-port", str(free_tcp_port())]
+        args += ["--wait-viewer"]
+    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    client = None
+    if live:
+        assert proc.stdout is not None
+        url = proc.stdout.readline().split(": ")[-1].strip()
+        client = start_client(url, workdir / f"cpu{index}.json")
+    threading.Thread(target=lambda: proc.stdout and proc.stdout.read(), daemon=True).start()
+    sim = start_mavsim(port)
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)
+        proc.returncode = os.waitstatus_to_exitcode(status)
+    finally:
+        stop(sim)
+    assert proc.returncode == 0, f"fly exited {proc.returncode}"
+    if client is not None:
+        client.wait(60)
+    return usage.ru_utime + usage.ru_stime
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--client", nargs=2, metavar=("URL", "OUT"), help=argparse.SUPPRESS)
+    options = parser.parse_args()
+    if options.client:
+        client_main(*options.client)
+        return 0
+    with tempfile.TemporaryDirectory() as tmp:
+        workdir = Path(tmp)
+        floor = sdk_floor(workdir)
+        runs = [latency_run(workdir, i) for i in range(options.runs)]
+        cpu = {"plain": [], "live": []}
+        for i in range(options.runs):  # interleaved: drift hits both alike
+            cpu["plain"].append(cpu_run(workdir, i, live=False))
+            cpu["live"].append(cpu_run(workdir, i, live=True))
+    latency = statistics.median(r[0] for r in runs)
+    parity = statistics.median(r[1] for r in runs)
+    messages = statistics.median(r[2] for r in runs)
+    figures = [
+        Figure(
+            f"latency p99, logged to received ({messages:.0f} messages a flight)",
+            latency,
+            floor,
+            "foxglove-sdk alone",
+            LATENCY_TARGET_S,
+            kind="max",
+        ),
+        Figure(
+            "CPU of a real-time flight with --live and a client",
+            statistics.median(cpu["live"]),
+            statistics.median(cpu["plain"]),
+            "without --live",
+            COST_TARGET,
+        ),
+        Figure("parity", parity * 100, 100.0, "the recording", 100.0, unit=" %", kind="min"),
+    ]
+    for figure in figures:
+        print(figure.line())
+    print(f"runs: latency p99 {[round(r[0] * 1000, 2) for r in runs]} ms; CPU {cpu}")
+    return 0 if all(f.ok for f in figures) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
