@@ -240,6 +240,23 @@ def test_one_signal_ends_a_live_run_with_the_recording_finished_and_the_servers_
         s.connect(("127.0.0.1", port))
 
 
+def test_a_signal_ends_the_wait_for_a_viewer(tmp_path: Path, procs: list[AeroexecProcess]) -> None:
+    """--wait-viewer waits for nothing longer than one signal: the recording is finished
+    (interrupted, with the session's first messages) and the servers closed."""
+    record = tmp_path / "waited.mcap"
+    proc = Live(["run", str(APPENDIX_C), *live_args(record, "--wait-viewer")])
+    procs.append(proc)
+    proc.wait_for("live: the mission starts when a viewer subscribes")
+    time.sleep(1.0)
+    proc.popen.send_signal(signal.SIGTERM)
+    code, out, err = proc.finish(timeout=10)
+    assert code == 143, err
+    assert "start    TAKE_OFF" not in out  # the mission never started
+    recording = open_recording(record)
+    assert recording.complete
+    assert recording.metadata["aeroexec_end"]["reason"] == "interrupted"
+
+
 def test_the_servers_listen_on_loopback_only(tmp_path: Path, procs: list[AeroexecProcess]) -> None:
     psutil = pytest.importorskip("psutil")
     proc = Live(["run", str(write_mission(tmp_path, PATROL)), "--live", "--port", "0"])

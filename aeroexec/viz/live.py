@@ -45,10 +45,11 @@ from aeroexec import interrupts
 from aeroexec.errors import ViewerError, WorldError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.recording.reader import ChannelInfo, decode_record
+from aeroexec.recording.schemas import SERVICE_CALL
 from aeroexec.vehicles.world import parse_world
 from aeroexec.viz.blueprint import build_blueprint
 from aeroexec.viz.columns import ColumnWriter
-from aeroexec.viz.convert import SessionConverter
+from aeroexec.viz.convert import SessionConverter, draws
 from aeroexec.viz.layout import layouts_for
 from aeroexec.viz.scene import WORLD_ATTACHMENT, log_view_coordinates, trajectory_color
 from aeroexec.viz.view import APPLICATION_ID, start_source
@@ -61,6 +62,10 @@ DEFAULT_FOXGLOVE_PORT = 8765
 DEFAULT_RERUN_PORT = 9876
 #: How long a new channel's messages wait for a viewer to subscribe (s).
 HOLD_S = 1.0
+#: How often held channels are looked at for their hold's end (s).
+CHECK_S = 0.05
+#: How long after a subscription its held messages are sent (s).
+RELEASE_DELAY_S = 0.002
 #: How many times a channel whose subscription the server refused is advertised again.
 READVERTISE = 5
 #: The SDK's logger, and its line, for a subscription it refused.
@@ -71,8 +76,9 @@ _REFUSED = re.compile(r"attempted to subscribe to unknown channel: (\d+)")
 BACKLOG = 1 << 16
 #: After the session, how long the servers stay up for the last messages to leave (s).
 LINGER_S = 0.3
-#: How often the Rerun rows held by the column writer are sent (s of wall time).
-RERUN_SEND_S = 0.05
+#: How often the Rerun rows held by the column writer are sent (s of wall time): as
+#: often as Rerun's own batcher sends what is logged row by row (each send costs ~1 ms).
+RERUN_SEND_S = 0.2
 ABORT_SERVICE = "/abort_mission"
 PARAMETER_PREFIX = "aeroexec/"
 
@@ -140,6 +146,14 @@ class FoxgloveLive(ServerListener):
         #: server channel ids a viewer has subscribed to (written by the server's thread)
         self._subscribed: set[int] = set()
         self._viewer = threading.Event()
+        self._next_check = 0.0
+        #: recording channel id -> its server channel's `log` (the path of every message)
+        self._logs: dict[int, Any] = {}
+        #: set by a subscription: the releaser sends what was held for it at once
+        self._wake = threading.Event()
+        self._stopping = False
+        self._releaser = threading.Thread(target=self._releasing, daemon=True)
+        self._releaser.start()
         #: server channel ids whose subscription the server refused (`_readvertise`)
         self._refused: set[int] = set()
         #: recording channel id -> how many times it was advertised again
@@ -197,18 +211,24 @@ class FoxgloveLive(ServerListener):
         )
         with self._lock:
             self._channels[channel.id] = served
+            self._logs[channel.id] = served.base.log
             self._recorded[served.id()] = channel.id
             self._pending[channel.id] = []
             self._since[channel.id] = time.monotonic()
 
     def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
-        if self._pending or self._refused:
-            self._release(time.monotonic())
+        if not (self._pending or self._refused):
+            self._logs[channel_id](data, log_time_ns)
+            return
+        now = time.monotonic()
+        if self._refused or now >= self._next_check:
+            self._release(now)
+        with self._lock:  # a held channel may be released by the releaser's thread
             held = self._pending.get(channel_id)
             if held is not None:
                 held.append((log_time_ns, data))
-                return
-        self._channels[channel_id].base.log(data, log_time_ns)
+            else:
+                self._logs[channel_id](data, log_time_ns)
 
     def recording_closed(self) -> None:
         self.release_all()
@@ -234,6 +254,9 @@ class FoxgloveLive(ServerListener):
             self._pending.clear()
 
     def _release(self, now: float) -> None:
+        """Advertise refused channels again; send what is held for subscribed channels;
+        end the hold of those no one subscribed to in time."""
+        self._next_check = now + CHECK_S
         with self._lock:
             refused, self._refused = self._refused, set()
             for served_id in refused:
@@ -267,6 +290,7 @@ class FoxgloveLive(ServerListener):
         )
         del self._recorded[served.id()]
         self._channels[channel_id] = again
+        self._logs[channel_id] = again.base.log
         self._recorded[again.id()] = channel_id
         self._pending.setdefault(channel_id, [])
         self._since[channel_id] = now
@@ -280,16 +304,33 @@ class FoxgloveLive(ServerListener):
         self._refused.add(int(found[1]))
         return False
 
+    def _releasing(self) -> None:
+        """The releaser's thread: what was held for a channel leaves as soon as a viewer
+        subscribes to it, not with the session's next message."""
+        while True:
+            self._wake.wait()
+            if self._stopping:
+                return
+            time.sleep(RELEASE_DELAY_S)  # the server registers the subscription first
+            self._wake.clear()
+            with self._lock:
+                for channel_id in list(self._pending):
+                    served = self._channels[channel_id]
+                    if served.id() in self._subscribed:
+                        for log_time_ns, data in self._pending.pop(channel_id):
+                            served.base.log(data, log_time_ns)
+
     # -- ServerListener (the server's thread) ---------------------------------------------
     def on_subscribe(self, client: Client, channel: ChannelView) -> None:
-        with self._lock:
-            self._subscribed.add(channel.id)
-            if not self._viewer.is_set():
-                # held channels age from the first viewer on
-                now = time.monotonic()
-                for channel_id in self._since:
-                    self._since[channel_id] = now
+        # Without the lock (a set's add, a dict's store): the releaser holds it while it
+        # hands messages to this server.
+        self._subscribed.add(channel.id)
+        if not self._viewer.is_set():
+            now = time.monotonic()  # held channels age from the first viewer on
+            for channel_id in list(self._since):
+                self._since[channel_id] = now
         self._viewer.set()
+        self._wake.set()
 
     def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
         return None
@@ -316,6 +357,9 @@ class FoxgloveLive(ServerListener):
     def close(self) -> None:
         if self._viewer.is_set():
             time.sleep(LINGER_S)
+        self._stopping = True
+        self._wake.set()
+        self._releaser.join(1)
         self.server.stop()
         self._log.removeFilter(self._refusal)
 
@@ -339,7 +383,9 @@ class RerunLive:
         log_view_coordinates(self.stream)
         self.url = f"rerun+http://{options.host}:{port}/proxy"
         self._writer = ColumnWriter(self.stream)
-        self._channels: dict[int, ChannelInfo] = {}
+        #: channel id -> (the channel, whether its messages become rows)
+        self._channels: dict[int, tuple[ChannelInfo, bool]] = {}
+        self._prefix = "/"
         self._converter: SessionConverter | None = None
         self._sim = True
         self._world = None
@@ -350,6 +396,7 @@ class RerunLive:
         self, metadata: Mapping[str, str], attachments: Mapping[str, bytes]
     ) -> None:
         self._sim = metadata.get("clock") == "sim"
+        self._prefix = f"/{metadata.get('drone', 'drone1')}/"
         world_text = attachments.get(WORLD_ATTACHMENT)
         if world_text is not None:
             with contextlib.suppress(WorldError):
@@ -364,13 +411,18 @@ class RerunLive:
         )
 
     def channel_added(self, channel: ChannelInfo) -> None:
-        self._channels[channel.id] = channel
+        name = channel.topic.removeprefix(self._prefix)
+        self._channels[channel.id] = (channel, channel.schema_name == SERVICE_CALL or draws(name))
 
     def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
-        record = decode_record(self._channels[channel_id], log_time_ns, data)
+        channel, drawn = self._channels[channel_id]
+        converter = self._converter
+        if converter is not None and not drawn:
+            converter.pass_over(log_time_ns)  # not decoded: most of a flight's messages
+            return
+        record = decode_record(channel, log_time_ns, data)
         if record is None:
             return
-        converter = self._converter
         if converter is None:
             converter = self._converter = SessionConverter(
                 self.stream,
