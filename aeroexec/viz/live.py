@@ -27,12 +27,14 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import os
 import re
 import socket
+import stat
 import threading
 import time
 import uuid
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -122,6 +124,44 @@ def check_port_free(host: str, port: int, what: str) -> None:
             ) from None
 
 
+def no_delay(port: int) -> int:
+    """Set TCP_NODELAY on this process's connected TCP sockets whose local port is `port`
+    (the Foxglove server's connections to its viewers); how many were set.
+
+    foxglove-sdk 0.30's server leaves Nagle's algorithm on: a burst of small messages
+    (a behavior's start: a dozen service calls in one tick) then waits for the viewer's
+    delayed ACK, ~40 ms on Linux, before its second packet leaves. The sockets are the
+    server's, in this process: they are found by their descriptors (Linux's
+    /proc/self/fd; elsewhere /dev/fd), and set through a duplicate."""
+    folder = "/proc/self/fd" if os.path.isdir("/proc/self/fd") else "/dev/fd"
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return 0
+    done = 0
+    for name in names:
+        try:
+            fd = int(name)
+            if not stat.S_ISSOCK(os.fstat(fd).st_mode):
+                continue
+            duplicate = socket.socket(fileno=os.dup(fd))
+        except (ValueError, OSError):
+            continue
+        with duplicate:
+            try:
+                if (
+                    duplicate.type == socket.SOCK_STREAM
+                    and duplicate.family in (socket.AF_INET, socket.AF_INET6)
+                    and duplicate.getsockname()[1] == port
+                ):
+                    duplicate.getpeername()  # connected: not the listening socket
+                    duplicate.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                    done += 1
+            except OSError:
+                continue
+    return done
+
+
 def free_port(host: str = LOOPBACK) -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
         probe.bind((host, 0))
@@ -146,6 +186,7 @@ class FoxgloveLive(ServerListener):
         #: server channel ids a viewer has subscribed to (written by the server's thread)
         self._subscribed: set[int] = set()
         self._viewer = threading.Event()
+        self._clients: set[int] = set()
         self._next_check = 0.0
         #: recording channel id -> its server channel's `log` (the path of every message)
         self._logs: dict[int, Any] = {}
@@ -234,11 +275,15 @@ class FoxgloveLive(ServerListener):
         self.release_all()
 
     # -- viewers -------------------------------------------------------------------------
-    def wait_for_viewer(self) -> None:
+    def wait_for_viewer(self, keep: Callable[[], None] | None = None) -> None:
         """Until a viewer subscribes (a signal ends the wait), then a moment for the rest
-        of its subscriptions, which come in one request."""
+        of its subscriptions, which come in one request. `keep` runs every 50 ms
+        meanwhile (a live vehicle's link is served: its packets read, its heartbeats
+        sent)."""
         while not self._viewer.wait(0.05):
             interrupts.check()
+            if keep is not None:
+                keep()
         time.sleep(0.1)
         self._release(time.monotonic())
 
@@ -324,6 +369,9 @@ class FoxgloveLive(ServerListener):
     def on_subscribe(self, client: Client, channel: ChannelView) -> None:
         # Without the lock (a set's add, a dict's store): the releaser holds it while it
         # hands messages to this server.
+        if client.id not in self._clients:  # a new viewer: before its first message
+            self._clients.add(client.id)
+            no_delay(self.server.port)
         self._subscribed.add(channel.id)
         if not self._viewer.is_set():
             now = time.monotonic()  # held channels age from the first viewer on
@@ -512,7 +560,9 @@ class LiveView:
         self._executive = executive
         self._mission = True
         if self.options.wait_viewer:
-            self.foxglove.wait_for_viewer()
+            vehicle = executive.vehicle
+            live = executive.clock.kind == "wall"  # a link to serve while it waits
+            self.foxglove.wait_for_viewer((lambda: vehicle.step(0.0)) if live else None)
 
     def mission_ended(self) -> None:
         """The mission is over (its ending may still run): nothing left to abort."""
