@@ -348,3 +348,33 @@ def test_fly_live_on_mavsim_serves_exactly_the_recording(
     assert_parity(client, record)
     topics = {m.topic for m in client.messages}
     assert {"/drone1/mavlink/rx", "/drone1/mavlink/tx", "/drone1/scene"} <= topics
+
+
+def test_fly_wait_viewer_keeps_the_link_while_it_waits(
+    tmp_path: Path, procs: list[AeroexecProcess]
+) -> None:
+    """A viewer that comes after the heartbeat timeout (3 s): the link was served while
+    fly waited, so the flight is as it would have been, with no link lost."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    proc = Live(
+        [
+            "fly",
+            str(APPENDIX_C),
+            "--connect",
+            f"udpin:127.0.0.1:{port}",
+            *live_args(record, "--wait-viewer"),
+        ]
+    )
+    procs.append(proc)
+    url = proc.url()
+    with mavsim_thread(f"udpout:127.0.0.1:{port}"):
+        proc.wait_for("mavlink: autopilot system 1")
+        time.sleep(4.5)
+        assert not any("start    TAKE_OFF" in line for line in proc.out)  # still waiting
+        client = FoxgloveClient(url).start()
+        code, out, err = proc.finish()
+    assert code == 0, err
+    assert "link lost" not in out + err
+    client.wait_closed()
+    assert_parity(client, record)
