@@ -32,7 +32,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from foxglove_client import FoxgloveClient
 from live_helpers import AeroexecProcess, cpu_loaded, free_tcp_port, free_udp_port, write_mission
+from test_live import assert_parity
 
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.properties.check import check_recording
@@ -358,6 +360,25 @@ LONGER = (
     "    results.append(api.executeBehavior('LAND'))\n"
     "    return results\n"
 )
+
+
+def test_fly_live_on_sitl_serves_exactly_the_recording(tmp_path: Path, flight: Any) -> None:
+    """`fly --live` on the real autopilot: a foxglove.sdk.v1 client connected before the
+    mission starts receives every message of the recording, byte for byte (issue 28)."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    args = fly_args(APPENDIX_C, f"udpin:127.0.0.1:{port}", record)
+    fly = flight(Fly, [*args, "--live", "--port", "0", "--rerun-port", "0", "--wait-viewer"])
+    url = fly.wait_for("live: Foxglove, Lichtblick: ").split(": ")[-1].strip()
+    flight(Sitl, tmp_path, serial0=f"udpclient:127.0.0.1:{port}")
+    client = FoxgloveClient(url).start()
+    code, out, err = fly.finish()
+
+    assert code == 0, err
+    assert "7 activations: 6 GOAL_ACHIEVED, 0 rejected" in out
+    client.wait_closed()
+    assert_parity(client, record)
+    assert {"/drone1/mavlink/rx", "/drone1/vehicle/state"} <= {m.topic for m in client.messages}
 
 
 def test_a_longer_mission_over_tcp(tmp_path: Path, flight: Any) -> None:

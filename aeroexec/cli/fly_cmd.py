@@ -2,14 +2,23 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from enum import Enum
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
 from aeroexec.cli.command import running
+from aeroexec.cli.live import (
+    LiveOption,
+    PortOption,
+    RerunPortOption,
+    WaitViewerOption,
+    live_view,
+)
 from aeroexec.cli.options import (
     Color,
     allow_remote_option,
@@ -44,6 +53,9 @@ from aeroexec.mission.activity import ActivityLog
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.vehicles.mavlink.endpoint import DEFAULT_BAUD, DEFAULT_GCS_URL
 from aeroexec.vehicles.mavlink.vehicle import MavlinkVehicle
+
+if TYPE_CHECKING:
+    from aeroexec.viz.live import LiveView
 
 
 class Failsafe(str, Enum):
@@ -154,7 +166,10 @@ def fly_command(
         help="MAVLink 2 signing: 64 hex digits or a passphrase.",
         show_default=False,
     ),
-    allow_remote: bool = allow_remote_option("Allow a non-loopback endpoint (a real network)."),
+    allow_remote: bool = allow_remote_option(
+        "Allow a non-loopback endpoint (a real network); with --live, serve on every "
+        "network interface too."
+    ),
     allow_no_gcs_failsafe: bool = typer.Option(
         False,
         "--allow-no-gcs-failsafe",
@@ -177,6 +192,10 @@ def fly_command(
     disable_plugin: DisablePluginOption = None,
     allow_unimplemented: AllowUnimplementedOption = False,
     spec: SpecOption = None,
+    live: LiveOption = False,
+    port: PortOption = None,
+    rerun_port: RerunPortOption = None,
+    wait_viewer: WaitViewerOption = False,
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
     color: Color = color_option(),
@@ -192,6 +211,10 @@ def fly_command(
       aeroexec fly missions/appendix_c.py -o flight.mcap
       aeroexec fly missions/appendix_c.py --connect tcp:127.0.0.1:5760 \\
           --connect-timeout 60
+
+    With --live the flight is served as it happens (Foxglove, Lichtblick:
+    ws://127.0.0.1:8765; Rerun: rerun rerun+http://127.0.0.1:9876/proxy); a viewer may
+    call /abort_mission, and the flight ends as --on-exit says.
 
     However it ends, the vehicle is never left flying by surprise: see --on-exit,
     --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle
@@ -221,12 +244,35 @@ def fly_command(
         baud=baud,
         allow_no_gcs_failsafe=allow_no_gcs_failsafe,
     )
+    with live_view(
+        live,
+        port=port,
+        rerun_port=rerun_port,
+        wait_viewer=wait_viewer,
+        allow_remote=allow_remote,
+        abort_action=on_exit.value,
+        output=output,
+    ) as view:
+        _fly(replace(config, tap=view), mission, spec, quiet, debug, color, view)
+
+
+def _fly(
+    config: FlightConfig,
+    mission: Path,
+    spec: SpecOption,
+    quiet: bool,
+    debug: bool,
+    color: Color,
+    view: LiveView | None,
+) -> None:
     monitor = monitor_for(spec, live=True)
     observers: list[BusObserver] = [AutopilotTexts()]
     if not quiet:
         observers.append(ActivityLog(on_change=print_row))
     if monitor is not None:
         observers.append(monitor)
+    if view is not None:
+        observers.append(view)
     with silenced(quiet):
         result = fly(
             config,

@@ -3,16 +3,26 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.live import (
+    LiveOption,
+    PortOption,
+    RerunPortOption,
+    WaitViewerOption,
+    live_view,
+)
 from aeroexec.cli.options import (
     Color,
+    allow_remote_option,
     apply_timeout,
     catalog_option,
     color_option,
@@ -37,6 +47,8 @@ from aeroexec.cli.project import (
 )
 from aeroexec.cli.spec import SpecOption, monitor_for, print_verdicts
 from aeroexec.cli.tables import print_table
+from aeroexec.config import ProjectConfig
+from aeroexec.errors import AeroexecError
 from aeroexec.executive.bus import BusObserver
 from aeroexec.executive.clock import NS_PER_S
 from aeroexec.mission.activity import Activation, ActivityLog, format_arguments
@@ -47,6 +59,9 @@ from aeroexec.mission.session import (
     SessionResult,
     simulate,
 )
+
+if TYPE_CHECKING:
+    from aeroexec.viz.live import LiveView
 
 
 def print_row(row: Activation) -> None:
@@ -144,6 +159,22 @@ def run(
         show_default=False,
     ),
     spec: SpecOption = None,
+    live: LiveOption = False,
+    port: PortOption = None,
+    rerun_port: RerunPortOption = None,
+    wait_viewer: WaitViewerOption = False,
+    speed: float | None = typer.Option(
+        None,
+        "--speed",
+        metavar="FACTOR",
+        help="Keep the simulated clock to the wall clock, FACTOR times as fast (default with "
+        "--live: 1, real time; without: as fast as it computes). The session and its "
+        "recording are the same at any speed.",
+        show_default=False,
+    ),
+    allow_remote: bool = allow_remote_option(
+        "With --live: serve on every network interface, not only this machine (127.0.0.1)."
+    ),
     quiet: bool = quiet_option(),
     debug: bool = debug_option(),
     color: Color = color_option(),
@@ -153,6 +184,11 @@ def run(
     Example:
 
         aeroexec run missions/appendix_c.py -o flight.mcap
+        aeroexec run missions/appendix_c.py -o flight.mcap --live --wait-viewer
+
+    With --live the session is served as it happens (Foxglove, Lichtblick: connect to
+    ws://127.0.0.1:8765; Rerun: rerun rerun+http://127.0.0.1:9876/proxy), at real time
+    unless --speed; a viewer may call the service /abort_mission, and the vehicle lands.
 
     Behaviors come from -b/--behaviors, the project's [tool.aeroexec] table (nearest
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
@@ -167,7 +203,58 @@ def run(
     """
     apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
+    if speed is not None and not (speed > 0 and math.isfinite(speed)):
+        raise AeroexecError(f"invalid value for --speed: {speed:g}: give a factor above 0")
+    if allow_remote and not live:
+        raise AeroexecError("--allow-remote is for --live: add --live")
     settings = project()
+    with live_view(
+        live,
+        port=port,
+        rerun_port=rerun_port,
+        wait_viewer=wait_viewer,
+        allow_remote=allow_remote,
+        abort_action="land",
+        output=output,
+    ) as view:
+        _run(
+            mission,
+            catalog,
+            seed,
+            world,
+            output,
+            behaviors,
+            disable_plugin,
+            allow_unimplemented,
+            max_sim_time,
+            spec,
+            quiet,
+            debug,
+            color,
+            settings,
+            view,
+            speed if speed is not None or not live else 1.0,
+        )
+
+
+def _run(
+    mission: Path,
+    catalog: Path | None,
+    seed: int | None,
+    world: Path | None,
+    output: Path | None,
+    behaviors: BehaviorsOption,
+    disable_plugin: DisablePluginOption,
+    allow_unimplemented: bool,
+    max_sim_time: float,
+    spec: SpecOption,
+    quiet: bool,
+    debug: bool,
+    color: Color,
+    settings: ProjectConfig,
+    view: LiveView | None,
+    speed: float | None,
+) -> None:
     config = SessionConfig(
         mission=mission,
         catalog=catalog_path(catalog, settings, DEFAULT_CATALOG),
@@ -177,6 +264,8 @@ def run(
         behaviors=project_behaviors(behaviors, settings, disable_plugin),
         allow_unimplemented=allow_unimplemented,
         max_sim_time_s=max_sim_time or None,
+        tap=view,
+        speed=speed,
     )
     monitor = monitor_for(spec)
     observers: list[BusObserver] = (
@@ -184,6 +273,8 @@ def run(
     )
     if monitor is not None:
         observers.append(monitor)
+    if view is not None:
+        observers.append(view)
     with silenced(quiet):
         result = simulate(config, observers=observers, announce=error_line)
     print_summary(result, styled=use_color(color))

@@ -43,6 +43,31 @@ class SimClock:
         return self._now
 
 
+class PacedSimClock(SimClock):
+    """Simulated time kept to the wall clock: a tick lasts `tick / speed` of real time
+    (`run --live --speed`), so a viewer sees the flight as it would happen. Only when
+    each tick runs is paced, never what it computes: the session and its recording are
+    those of the unpaced run (`kind` stays "sim")."""
+
+    def __init__(self, tick_ns: int = DEFAULT_TICK_NS, speed: float = 1.0) -> None:
+        super().__init__(tick_ns)
+        if not speed > 0:
+            raise ValueError("speed must be positive")
+        self.speed = speed
+        self._wall_start: int | None = None
+
+    def advance(self) -> int:
+        now = super().advance()
+        if self._wall_start is None:
+            # the first tick starts the wall clock: set-up before it is not waited for
+            self._wall_start = time.monotonic_ns() - round(self.tick_ns / self.speed)
+        due = self._wall_start + round(now / self.speed)
+        delay = due - time.monotonic_ns()
+        if delay > 0:
+            time.sleep(delay / NS_PER_S)
+        return now
+
+
 class WallClock:
     kind = "wall"
 

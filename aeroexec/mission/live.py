@@ -40,12 +40,14 @@ from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission,
 from aeroexec.mission.session import (
     SessionResult,
     end_observing,
+    mission_over,
     session_code,
     session_observers,
     stand_in_metadata,
     start_observing,
 )
 from aeroexec.plugins.discovery import BehaviorSet
+from aeroexec.recording.tap import RecordTap
 from aeroexec.vehicles.base import VehicleCommandError
 from aeroexec.vehicles.mavlink.codec import signing_key
 from aeroexec.vehicles.mavlink.endpoint import (
@@ -92,6 +94,8 @@ class FlightConfig:
     baud: int = DEFAULT_BAUD
     #: Fly although the autopilot's GCS failsafe is off (one warning instead of a refusal).
     allow_no_gcs_failsafe: bool = False
+    #: Sees the recording as it is written (a live view); recorded even without `record`.
+    tap: RecordTap | None = None
 
     def vehicle_config(self) -> MavlinkConfig:
         """The vehicle's configuration; `MavlinkError` for values that cannot work."""
@@ -238,6 +242,7 @@ def fly(
             code.records,
             start=vehicle.state(),
             live=clock.kind == "wall",
+            tap=config.tap,
         )
         executive = Executive(
             catalog,
@@ -267,6 +272,7 @@ def fly(
             # vehicle gets its ending before the exception goes on.
             stopped = exc
             how = exc.name if isinstance(exc, Interrupted) else type(exc).__name__
+        mission_over(observers, executive, outcome.ending is ScriptEnding.STOPPED)
         # When and how the mission ended: replay stops a mission stopped here at the
         # same tick, and tells the ending's commands from the mission's.
         executive.bus.publish(

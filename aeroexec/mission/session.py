@@ -7,6 +7,7 @@ checkable.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -19,7 +20,7 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import NS_PER_S, SimClock
+from aeroexec.executive.clock import NS_PER_S, PacedSimClock, SimClock
 from aeroexec.executive.executive import Executive
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import Interrupted
@@ -41,6 +42,7 @@ from aeroexec.vehicles.sim import SimVehicle
 
 if TYPE_CHECKING:
     from aeroexec.recording import Recorder
+    from aeroexec.recording.tap import RecordTap
     from aeroexec.vehicles.world import ScheduledFailure, World
 
 
@@ -69,6 +71,11 @@ class SessionConfig:
     #: Where the vehicle starts instead of the world's: (x, y, yaw in degrees), on the
     #: ground (a flight's simulated twin starts where the flight did).
     start: tuple[float, float, float] | None = None
+    #: Sees the recording as it is written (a live view); it is recorded even without
+    #: `record` (to no file).
+    tap: RecordTap | None = None
+    #: Keep the simulated clock to the wall clock at this factor (None: as fast as it runs).
+    speed: float | None = None
 
 
 @dataclass(frozen=True)
@@ -144,24 +151,27 @@ def session_observers(
     records: Mapping[str, Mapping[str, str]] | None = None,
     world: World | None = None,
     start: VehicleState | None = None,
+    tap: RecordTap | None = None,
     *,
     live: bool = False,
 ) -> tuple[ActivityLog, list[BusObserver], Recorder | None]:
     """The observers every session has: its activity log, the caller's, and the
     recorder when one is asked for (the caller closes it). `world`: what the vehicle
     flies in, drawn in the recording's 3D scene; `start`: the vehicle's state the session
-    starts from, whose pose places the vehicle in that scene from the first instant.
-    `live`: the session runs on the wall clock (a flight), so its recording also keeps
-    the time flush bound (a crash loses at most 0.5 s of it); a simulated session's is
-    bounded by message count and size only (docs/recording.md)."""
+    starts from, whose pose places the vehicle in that scene from the first instant;
+    `tap`: sees the recording as it is written (without `record`, the session is
+    recorded to no file for it). `live`: the session runs on the wall clock (a flight),
+    so its recording also keeps the time flush bound (a crash loses at most 0.5 s of
+    it); a simulated session's is bounded by message count and size only
+    (docs/recording.md)."""
     activity = ActivityLog()
     everyone: list[BusObserver] = [activity, *observers]
     recorder = None
-    if record is not None:
+    if record is not None or tap is not None:
         from aeroexec.recording import FLUSH_INTERVAL_NS, Recorder
 
         recorder = Recorder(
-            record,
+            record if record is not None else os.devnull,
             drone=drone,
             metadata=metadata,
             attachments=attachments,
@@ -169,6 +179,7 @@ def session_observers(
             world=world,
             start_pose=(*start.position, start.yaw) if start is not None else None,
             flush_interval_ns=FLUSH_INTERVAL_NS if live else None,
+            tap=tap,
         )
         everyone.append(recorder)
     return activity, everyone, recorder
@@ -267,12 +278,13 @@ def simulate(
         code.records,
         vehicle.world,
         vehicle.state(),
+        config.tap,
     )
     with recording_session(recorder, vehicle):
         executive = Executive(
             catalog,
             vehicle=vehicle,
-            clock=SimClock(),
+            clock=SimClock() if config.speed is None else PacedSimClock(speed=config.speed),
             library=code.library,
             observers=all_observers,
             drone=config.drone,
@@ -282,6 +294,7 @@ def simulate(
         start_observing(observers, executive)
         api = MissionAPI(executive)
         outcome = run_script(script, api)
+        mission_over(observers, executive, outcome.ending is Ending.STOPPED)
         assurance: list[str] = []
         if outcome.ending is Ending.STOPPED and executive.stop_request is not None:
             start = vehicle.world.start
@@ -312,6 +325,18 @@ def start_observing(observers: Iterable[BusObserver], executive: Executive) -> N
             started(executive)
 
 
+def mission_over(observers: Iterable[BusObserver], executive: Executive, stopped: bool) -> None:
+    """The mission script is over, the ending comes: observers with a `mission_ended()`
+    method hear it (a live view takes no more aborts). A stop asked for now, when the
+    mission was not stopped, is dropped: the ending steps on."""
+    for observer in observers:
+        ended = getattr(observer, "mission_ended", None)
+        if ended is not None:
+            ended()
+    if not stopped:
+        executive.stop_request = None
+
+
 def end_observing(observers: Iterable[BusObserver], executive: Executive) -> None:
     """Tell those observers the session ends, while it can still publish (and record)."""
     for observer in observers:
@@ -331,7 +356,8 @@ def recording_session(recorder: Recorder | None, vehicle: Vehicle | None = None)
         if recorder is not None and not recorder.closed:
             fault = vehicle.state().fault if vehicle is not None else ""
             end_recording(recorder, "interrupted", stop.name, fault)
-            stop.notes.append(finalized_note(recorder))
+            if str(recorder.path) != os.devnull:  # recorded for a live view only
+                stop.notes.append(finalized_note(recorder))
         raise
     finally:
         if recorder is not None and not recorder.closed:

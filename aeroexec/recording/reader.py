@@ -327,6 +327,19 @@ def _channel_info(channel: Channel, schema: Schema | None) -> ChannelInfo:
     )
 
 
+def decode_record(channel: ChannelInfo, log_time_ns: int, data: bytes) -> Record | None:
+    """One message's typed record, as `Recording.records` gives it (None when its
+    channel is not JSON or it does not decode): the live view reads what is written
+    through this, as `view` reads the file."""
+    if channel.message_encoding != MESSAGE_ENCODING:
+        return None
+    try:
+        value = json.loads(data)
+    except ValueError:
+        return None
+    return _typed(channel, log_time_ns, value)
+
+
 def _typed(channel: ChannelInfo, log_time_ns: int, data: Any) -> Record | None:
     if channel.schema_name == SERVICE_CALL:
         if not isinstance(data, dict):

@@ -83,6 +83,7 @@ from aeroexec.recording.schemas import (
     schema_for,
     schema_name_for_topic,
 )
+from aeroexec.recording.tap import RecordTap, reading_of
 
 if TYPE_CHECKING:
     from aeroexec.vehicles.world import World
@@ -266,6 +267,7 @@ class Recorder:
         compression: str = "lz4",
         world: World | None = None,
         start_pose: Pose | None = None,
+        tap: RecordTap | None = None,
     ) -> None:
         if flush_messages < 1 or flush_bytes < 1 or (flush_interval_ns or 0) < 0:
             raise ValueError("flush bounds must be positive")
@@ -324,6 +326,8 @@ class Recorder:
         self._flushed = 0
         self._closed = False
         self._forget_finisher: Callable[[], None] = lambda: None
+        #: Sees every channel and message as written (the live view): a tee, not a copy.
+        self._tap = tap
         try:
             self._guard(
                 self._start, dict(metadata or {}), dict(attachments or {}), dict(records or {})
@@ -438,12 +442,16 @@ class Recorder:
         stays readable without a footer, and `OutputLost` says so."""
         if self._closed:
             return
-        self._guard(self._finish)
-        self._closed = True
-        atexit.unregister(self.close)
-        self._forget_finisher()
-        self._stream.close()
-        self._flushed = self._count
+        try:
+            self._guard(self._finish)
+        finally:
+            self._closed = True
+            atexit.unregister(self.close)
+            self._forget_finisher()
+            self._stream.close()
+            self._flushed = self._count
+            if self._tap is not None:
+                self._tap.recording_closed()
 
     def finalized_note(self) -> str:
         """What a stopped command says about this (closed) recording."""
@@ -498,12 +506,15 @@ class Recorder:
         # Further records (`behaviors`: which code implemented each behavior).
         for name, record in records.items():
             self._writer.add_metadata(name, {str(k): str(v) for k, v in record.items()})
+        attached: dict[str, bytes] = {}
         for name, content in attachments.items():
-            data = content.encode() if isinstance(content, str) else bytes(content)
+            data = attached[name] = content.encode() if isinstance(content, str) else bytes(content)
             self._writer.add_attachment(
                 create_time=0, log_time=0, name=name, media_type=_media_type(name), data=data
             )
         self._stream.flush()
+        if self._tap is not None:
+            self._tap.recording_started(values, attached)
         self._mark_good()
 
     def _channel(self, topic: str, schema_name: str) -> int:
@@ -519,9 +530,22 @@ class Recorder:
                 name=definition.name, encoding=SCHEMA_ENCODING, data=definition.data
             )
             self._schemas[schema_name] = schema
-        return self._writer.register_channel(
+        channel = self._writer.register_channel(
             topic=topic, message_encoding=MESSAGE_ENCODING, schema_id=schema, metadata={}
         )
+        if self._tap is not None:
+            definition = schema_for(schema_name)
+            self._tap.channel_added(
+                reading_of(
+                    channel,
+                    topic,
+                    definition.name,
+                    SCHEMA_ENCODING,
+                    definition.data,
+                    MESSAGE_ENCODING,
+                )
+            )
+        return channel
 
     def _write(self, channel: int, log_time_ns: int, data: bytes) -> None:
         if self._closed:
@@ -531,6 +555,8 @@ class Recorder:
         count = self._count
         # add_message's arguments; the sequence is a uint32
         self._pending.append((channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF))
+        if self._tap is not None:  # a live viewer sees it now, not at the next flush
+            self._tap.message_written(channel, log_time_ns, data)
         self._count = count + 1
         unflushed = self._unflushed
         if not unflushed:
@@ -591,6 +617,8 @@ class Recorder:
             self._closed = True
             atexit.unregister(self.close)
             self._forget_finisher()
+            if self._tap is not None:
+                self._tap.recording_closed()
         with contextlib.suppress(OSError):  # flushing the buffer fails again: drop it
             self._stream.close()
         kept = self._salvage()

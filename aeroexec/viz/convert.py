@@ -116,6 +116,14 @@ class SessionConverter:
         if handler is not None:
             handler(self, record.data, t)
 
+    def pass_over(self, log_time_ns: int) -> None:
+        """A record that draws nothing (a topic with no handler: MAVLink traffic), counted
+        and timed as `feed` would, without decoding it."""
+        self.stats.records += 1
+        t = log_time_ns - self._origin
+        if self.stats.last_ns is None or t > self.stats.last_ns:
+            self.stats.last_ns = t
+
     def finish(self) -> ConvertStats:
         """Place what is still held (unfinished call trees), extend every step series to
         the end of the session, and send the remaining rows."""
@@ -323,10 +331,17 @@ _TOPIC_HANDLERS: dict[str, Callable[[SessionConverter, Any, int], None]] = {
     "properties": SessionConverter._property,
 }
 
+
+def draws(name: str) -> bool:
+    """Whether a topic's records (by name inside the namespace) become rows."""
+    return name in _TOPIC_HANDLERS
+
+
 __all__ = [
     "PROGRESS_EVERY",
     "ConvertStats",
     "ProgressCallback",
     "SessionConverter",
+    "draws",
     "session_origin_ns",
 ]

@@ -30,6 +30,7 @@ from aeroexec.outputs import Pipe, whole_file_or_none
 from aeroexec.progress import Advance, ProgressFactory
 from aeroexec.recording.reader import Recording, open_recording
 from aeroexec.recording.schemas import MESSAGE_ENCODING, PROFILE
+from aeroexec.vehicles.world import World
 from aeroexec.viz.blueprint import build_blueprint
 from aeroexec.viz.columns import ColumnWriter
 from aeroexec.viz.convert import PROGRESS_EVERY, ConvertStats, SessionConverter, session_origin_ns
@@ -225,6 +226,22 @@ def _write(
     return ViewReport(out, recording_id, tuple(reports))
 
 
+def start_source(
+    stream: rr.RecordingStream,
+    layout: Layout,
+    facts: dict[str, str],
+    world: World | None,
+    color: tuple[int, int, int],
+) -> None:
+    """What a source shows before its first message (here and in the live view): the
+    session's metadata (seed, catalog, world, ...) as a recording property, the world's
+    markers and the vehicle's body."""
+    stream.send_property(layout.root or "session", rr.AnyValues(**facts))
+    if world is not None:
+        log_world(stream, layout, world)
+    log_vehicle_body(stream, layout, color)
+
+
 def _convert(
     stream: rr.RecordingStream,
     writer: ColumnWriter,
@@ -235,13 +252,9 @@ def _convert(
 ) -> ConvertStats:
     recording = source.recording
     color = trajectory_color(index)
-    # The session's metadata (seed, catalog, world, ...) as a recording property.
     facts = {"file": Path(source.name).name, **recording.metadata.get("aeroexec", {})}
-    stream.send_property(layout.root or "session", rr.AnyValues(**facts))
     world, world_note = recorded_world(recording)
-    if world is not None:
-        log_world(stream, layout, world)
-    log_vehicle_body(stream, layout, color)
+    start_source(stream, layout, facts, world, color)
     survey = recording.survey()
     converter = SessionConverter(
         stream, writer, layout, origin_ns=session_origin_ns(recording), world=world, color=color

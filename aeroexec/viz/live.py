@@ -1,0 +1,611 @@
+"""`LiveView`: a session served live as it is recorded (`run --live`, `fly --live`).
+
+    live = LiveView(LiveOptions(port=8765, rerun_port=9876), label="flight.mcap")
+    simulate(SessionConfig(..., tap=live), observers=[live])
+    live.close()
+
+Two servers, both fed by the recorder's tap (`aeroexec.recording.tap`), never by an
+encoder of their own:
+
+* **Foxglove WebSocket** (`foxglove.sdk.v1`, the `foxglove-sdk` package): each channel of
+  the recording, with its topic and schema, and each message with the recording's bytes
+  and log time. Foxglove and Lichtblick (1.22 and later) connect to `ws://HOST:PORT`.
+  A server drops what is logged before a viewer subscribes, so a new channel's messages
+  are held until a viewer subscribes to it (or for `HOLD_S` with none): a viewer
+  connected when a channel appears gets its first message too. The service
+  `/abort_mission` ends the mission (the on-exit policy then applies); the catalog and
+  the session's settings are parameters a viewer can read and cannot change.
+* **Rerun gRPC** (rerun-sdk's `GrpcServerSink`): the rows `aeroexec view` would write
+  for the same recording (`SessionConverter`, reading each message as the reader
+  reads the file), with the same blueprint. Rerun's server keeps what was sent, so a
+  viewer that connects late still gets the whole session.
+
+Both listen on 127.0.0.1 unless told otherwise (`--allow-remote`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import re
+import socket
+import stat
+import threading
+import time
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import foxglove
+import orjson
+import rerun as rr
+from foxglove.websocket import Capability, ChannelView, Client, ServerListener
+
+from aeroexec import interrupts
+from aeroexec.errors import ViewerError, WorldError
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
+from aeroexec.recording.reader import ChannelInfo, decode_record
+from aeroexec.recording.schemas import SERVICE_CALL
+from aeroexec.vehicles.world import parse_world
+from aeroexec.viz.blueprint import build_blueprint
+from aeroexec.viz.columns import ColumnWriter
+from aeroexec.viz.convert import SessionConverter, draws
+from aeroexec.viz.layout import layouts_for
+from aeroexec.viz.scene import WORLD_ATTACHMENT, log_view_coordinates, trajectory_color
+from aeroexec.viz.view import APPLICATION_ID, start_source
+
+if TYPE_CHECKING:
+    from aeroexec.executive.executive import Executive
+
+LOOPBACK = "127.0.0.1"
+DEFAULT_FOXGLOVE_PORT = 8765
+DEFAULT_RERUN_PORT = 9876
+#: How long a new channel's messages wait for a viewer to subscribe (s).
+HOLD_S = 1.0
+#: How often held channels are looked at for their hold's end (s).
+CHECK_S = 0.05
+#: How long after a subscription its held messages are sent (s).
+RELEASE_DELAY_S = 0.002
+#: How many times a channel whose subscription the server refused is advertised again.
+READVERTISE = 5
+#: The SDK's logger, and its line, for a subscription it refused.
+SDK_CLIENT_LOGGER = "foxglove.websocket.connected_client"
+_REFUSED = re.compile(r"attempted to subscribe to unknown channel: (\d+)")
+#: Messages queued per viewer before the oldest are dropped (the SDK's default is 1024:
+#: a viewer subscribing to held channels gets them in one burst).
+BACKLOG = 1 << 16
+#: After the session, how long the servers stay up for the last messages to leave (s).
+LINGER_S = 0.3
+#: How often the Rerun rows held by the column writer are sent (s of wall time): as
+#: often as Rerun's own batcher sends what is logged row by row (each send costs ~1 ms).
+RERUN_SEND_S = 0.2
+ABORT_SERVICE = "/abort_mission"
+PARAMETER_PREFIX = "aeroexec/"
+
+
+@dataclass(frozen=True, slots=True)
+class LiveOptions:
+    host: str = LOOPBACK
+    #: The Foxglove WebSocket server's port (0: any free one).
+    port: int = DEFAULT_FOXGLOVE_PORT
+    #: The Rerun gRPC server's port; None: no Rerun stream.
+    rerun_port: int | None = DEFAULT_RERUN_PORT
+    #: Start the mission only once a viewer has subscribed.
+    wait_viewer: bool = False
+    #: What the mission's abort asks the session's ending for (`land`, `hold`, `none`).
+    abort_action: str = "land"
+
+
+def _json(value: object) -> bytes:
+    return orjson.dumps(value)
+
+
+def _object_schema(name: str) -> foxglove.MessageSchema:
+    data = _json({"type": "object", "title": name, "properties": {}})
+    return foxglove.MessageSchema(
+        encoding="json", schema=foxglove.Schema(name=name, encoding="jsonschema", data=data)
+    )
+
+
+def check_port_free(host: str, port: int, what: str) -> None:
+    """`ViewerError` when `port` cannot be listened on (Rerun's server fails later, and
+    only in its log, otherwise)."""
+    if port == 0:
+        return
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind((host, port))
+        except OSError as exc:
+            raise ViewerError(
+                f"{what} cannot listen on {host}:{port}: {exc.strerror or exc}"
+            ) from None
+
+
+def no_delay(port: int) -> int:
+    """Set TCP_NODELAY on this process's connected TCP sockets whose local port is `port`
+    (the Foxglove server's connections to its viewers); how many were set.
+
+    foxglove-sdk 0.30's server leaves Nagle's algorithm on: a burst of small messages
+    (a behavior's start: a dozen service calls in one tick) then waits for the viewer's
+    delayed ACK, ~40 ms on Linux, before its second packet leaves. The sockets are the
+    server's, in this process: they are found by their descriptors (Linux's
+    /proc/self/fd; elsewhere /dev/fd), and set through a duplicate."""
+    folder = "/proc/self/fd" if os.path.isdir("/proc/self/fd") else "/dev/fd"
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return 0
+    done = 0
+    for name in names:
+        try:
+            fd = int(name)
+            if not stat.S_ISSOCK(os.fstat(fd).st_mode):
+                continue
+            duplicate = socket.socket(fileno=os.dup(fd))
+        except (ValueError, OSError):
+            continue
+        with duplicate:
+            try:
+                if (
+                    duplicate.type == socket.SOCK_STREAM
+                    and duplicate.family in (socket.AF_INET, socket.AF_INET6)
+                    and duplicate.getsockname()[1] == port
+                ):
+                    duplicate.getpeername()  # connected: not the listening socket
+                    duplicate.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                    done += 1
+            except OSError:
+                continue
+    return done
+
+
+def free_port(host: str = LOOPBACK) -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind((host, 0))
+        return int(probe.getsockname()[1])
+
+
+class FoxgloveLive(ServerListener):
+    """The Foxglove WebSocket server: the recording's channels and messages, as written."""
+
+    def __init__(self, options: LiveOptions, abort: Any) -> None:
+        check_port_free(options.host, options.port, "the Foxglove WebSocket server")
+        self._context = foxglove.Context()
+        self._lock = threading.Lock()
+        self._abort = abort
+        self._wait = options.wait_viewer
+        #: recording channel id -> the server's channel, and back
+        self._channels: dict[int, foxglove.Channel] = {}
+        self._recorded: dict[int, int] = {}
+        #: recording channel id -> (log time, bytes) held until a viewer subscribes
+        self._pending: dict[int, list[tuple[int, bytes]]] = {}
+        self._since: dict[int, float] = {}
+        #: server channel ids a viewer has subscribed to (written by the server's thread)
+        self._subscribed: set[int] = set()
+        self._viewer = threading.Event()
+        self._clients: set[int] = set()
+        self._next_check = 0.0
+        #: recording channel id -> its server channel's `log` (the path of every message)
+        self._logs: dict[int, Any] = {}
+        #: set by a subscription: the releaser sends what was held for it at once
+        self._wake = threading.Event()
+        self._stopping = False
+        self._releaser = threading.Thread(target=self._releasing, daemon=True)
+        self._releaser.start()
+        #: server channel ids whose subscription the server refused (`_readvertise`)
+        self._refused: set[int] = set()
+        #: recording channel id -> how many times it was advertised again
+        self._again: dict[int, int] = {}
+        self._log = logging.getLogger(SDK_CLIENT_LOGGER)
+        self._log.addFilter(self._refusal)
+        self._parameters: dict[str, str] = {}
+        service = foxglove.Service(
+            ABORT_SERVICE,
+            schema=foxglove.ServiceSchema(
+                "aeroexec.AbortMission",
+                request=_object_schema("aeroexec.AbortMissionRequest"),
+                response=_object_schema("aeroexec.AbortMissionResponse"),
+            ),
+            handler=self._on_abort,
+        )
+        try:
+            self.server = foxglove.start_server(
+                name="aeroexec",
+                host=options.host,
+                port=options.port,
+                capabilities=[Capability.Services, Capability.Parameters],
+                supported_encodings=["json"],
+                services=[service],
+                server_listener=self,
+                context=self._context,
+                message_backlog_size=BACKLOG,
+            )
+        except Exception as exc:  # the SDK raises its own RuntimeError kinds
+            raise ViewerError(
+                f"the Foxglove WebSocket server cannot listen on {options.host}:{options.port}: "
+                f"{exc}"
+            ) from None
+        self.url = f"ws://{options.host}:{self.server.port}"
+
+    # -- the recorder's tap --------------------------------------------------------------
+    def recording_started(
+        self, metadata: Mapping[str, str], attachments: Mapping[str, bytes]
+    ) -> None:
+        values = {PARAMETER_PREFIX + key: value for key, value in metadata.items()}
+        for name, data in attachments.items():
+            if name in ("catalog.yaml", "world.yaml", "mission.py"):
+                values[PARAMETER_PREFIX + name] = data.decode("utf-8", errors="replace")
+        self._parameters = values
+
+    def channel_added(self, channel: ChannelInfo) -> None:
+        schema = foxglove.Schema(
+            name=channel.schema_name, encoding=channel.schema_encoding, data=channel.schema_data
+        )
+        served = foxglove.Channel(
+            channel.topic,
+            schema=schema,
+            message_encoding=channel.message_encoding,
+            context=self._context,
+        )
+        with self._lock:
+            self._channels[channel.id] = served
+            self._logs[channel.id] = served.base.log
+            self._recorded[served.id()] = channel.id
+            self._pending[channel.id] = []
+            self._since[channel.id] = time.monotonic()
+
+    def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
+        if not (self._pending or self._refused):
+            self._logs[channel_id](data, log_time_ns)
+            return
+        now = time.monotonic()
+        if self._refused or now >= self._next_check:
+            self._release(now)
+        with self._lock:  # a held channel may be released by the releaser's thread
+            held = self._pending.get(channel_id)
+            if held is not None:
+                held.append((log_time_ns, data))
+            else:
+                self._logs[channel_id](data, log_time_ns)
+
+    def recording_closed(self) -> None:
+        self.release_all()
+
+    # -- viewers -------------------------------------------------------------------------
+    def wait_for_viewer(self, keep: Callable[[], None] | None = None) -> None:
+        """Until a viewer subscribes (a signal ends the wait), then a moment for the rest
+        of its subscriptions, which come in one request. `keep` runs every 50 ms
+        meanwhile (a live vehicle's link is served: its packets read, its heartbeats
+        sent)."""
+        while not self._viewer.wait(0.05):
+            interrupts.check()
+            if keep is not None:
+                keep()
+        time.sleep(0.1)
+        self._release(time.monotonic())
+
+    def release_all(self) -> None:
+        """Send what is held for the channels a viewer subscribed to by now, giving a
+        connected viewer up to `HOLD_S` to subscribe to the newest ones."""
+        deadline = time.monotonic() + HOLD_S
+        while self._pending and self._viewer.is_set() and time.monotonic() < deadline:
+            self._release(time.monotonic())
+            if self._pending:
+                time.sleep(0.01)
+        with self._lock:
+            self._pending.clear()
+
+    def _release(self, now: float) -> None:
+        """Advertise refused channels again; send what is held for subscribed channels;
+        end the hold of those no one subscribed to in time."""
+        self._next_check = now + CHECK_S
+        with self._lock:
+            refused, self._refused = self._refused, set()
+            for served_id in refused:
+                channel_id = self._recorded.get(served_id)
+                if channel_id is not None:
+                    self._readvertise(channel_id, now)
+            subscribed = self._subscribed
+            viewer = self._viewer.is_set()
+            for channel_id in list(self._pending):
+                served = self._channels[channel_id]
+                if served.id() in subscribed:
+                    for log_time_ns, data in self._pending.pop(channel_id):
+                        served.base.log(data, log_time_ns)
+                elif (viewer or not self._wait) and now - self._since[channel_id] > HOLD_S:
+                    del self._pending[channel_id]  # no one wants it: live from now on
+
+    def _readvertise(self, channel_id: int, now: float) -> None:
+        """foxglove-sdk 0.30's server refuses some subscriptions that come right after a
+        channel's advertisement ("unknown channel"), a few in a hundred, and a viewer does
+        not ask again. The channel is advertised anew (and its messages held until the
+        viewer subscribes again), up to `READVERTISE` times."""
+        tries = self._again.get(channel_id, 0)
+        if tries >= READVERTISE:
+            return
+        self._again[channel_id] = tries + 1
+        served = self._channels[channel_id]
+        topic, schema, encoding = served.topic(), served.schema(), served.message_encoding
+        served.close()  # first: the server advertises no second channel of a topic
+        again = foxglove.Channel(
+            topic, schema=schema, message_encoding=encoding, context=self._context
+        )
+        del self._recorded[served.id()]
+        self._channels[channel_id] = again
+        self._logs[channel_id] = again.base.log
+        self._recorded[again.id()] = channel_id
+        self._pending.setdefault(channel_id, [])
+        self._since[channel_id] = now
+
+    def _refusal(self, record: logging.LogRecord) -> bool:
+        """The SDK's log of a refused subscription: the channel is advertised again (on
+        the session's thread), and the line is not printed (it is handled)."""
+        found = _REFUSED.search(record.getMessage())
+        if found is None:
+            return True
+        self._refused.add(int(found[1]))
+        return False
+
+    def _releasing(self) -> None:
+        """The releaser's thread: what was held for a channel leaves as soon as a viewer
+        subscribes to it, not with the session's next message."""
+        while True:
+            self._wake.wait()
+            if self._stopping:
+                return
+            time.sleep(RELEASE_DELAY_S)  # the server registers the subscription first
+            self._wake.clear()
+            with self._lock:
+                for channel_id in list(self._pending):
+                    served = self._channels[channel_id]
+                    if served.id() in self._subscribed:
+                        for log_time_ns, data in self._pending.pop(channel_id):
+                            served.base.log(data, log_time_ns)
+
+    # -- ServerListener (the server's thread) ---------------------------------------------
+    def on_subscribe(self, client: Client, channel: ChannelView) -> None:
+        # Without the lock (a set's add, a dict's store): the releaser holds it while it
+        # hands messages to this server.
+        if client.id not in self._clients:  # a new viewer: before its first message
+            self._clients.add(client.id)
+            no_delay(self.server.port)
+        self._subscribed.add(channel.id)
+        if not self._viewer.is_set():
+            now = time.monotonic()  # held channels age from the first viewer on
+            for channel_id in list(self._since):
+                self._since[channel_id] = now
+        self._viewer.set()
+        self._wake.set()
+
+    def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
+        return None
+
+    def on_get_parameters(
+        self, client: Client, param_names: list[str], request_id: str | None = None
+    ) -> list[foxglove.Parameter]:
+        names = param_names or sorted(self._parameters)
+        return [
+            foxglove.Parameter(name, value=self._parameters[name])
+            for name in names
+            if name in self._parameters
+        ]
+
+    def on_set_parameters(
+        self, client: Client, parameters: list[foxglove.Parameter], request_id: str | None = None
+    ) -> list[foxglove.Parameter]:
+        # What is recorded is not the viewer's to change: the values stay as they are.
+        return self.on_get_parameters(client, [p.name for p in parameters])
+
+    def _on_abort(self, request: foxglove.ServiceRequest) -> bytes:
+        return _json(self._abort())
+
+    def close(self) -> None:
+        if self._viewer.is_set():
+            time.sleep(LINGER_S)
+        self._stopping = True
+        self._wake.set()
+        self._releaser.join(1)
+        self.server.stop()
+        self._log.removeFilter(self._refusal)
+
+
+class RerunLive:
+    """The Rerun gRPC stream: what `view` would write for the recording, row for row."""
+
+    def __init__(self, options: LiveOptions, label: str) -> None:
+        assert options.rerun_port is not None
+        port = options.rerun_port or free_port(options.host)
+        check_port_free(options.host, port, "the Rerun gRPC server")
+        self._label = label
+        (self._layout,) = layouts_for([label])
+        self.stream = rr.RecordingStream(
+            APPLICATION_ID, recording_id=str(uuid.uuid4()), send_properties=False
+        )
+        self.stream.set_log_time_enabled(False)
+        self.stream.set_log_tick_enabled(False)
+        sink = rr.GrpcServerSink(bind_ip=options.host, port=port)
+        self.stream.set_sinks(sink, default_blueprint=build_blueprint([self._layout]))
+        log_view_coordinates(self.stream)
+        self.url = f"rerun+http://{options.host}:{port}/proxy"
+        self._writer = ColumnWriter(self.stream)
+        #: channel id -> (the channel, whether its messages become rows)
+        self._channels: dict[int, tuple[ChannelInfo, bool]] = {}
+        self._prefix = "/"
+        self._converter: SessionConverter | None = None
+        self._sim = True
+        self._world = None
+        self._sent = time.monotonic()
+        self._finished = False
+
+    def recording_started(
+        self, metadata: Mapping[str, str], attachments: Mapping[str, bytes]
+    ) -> None:
+        self._sim = metadata.get("clock") == "sim"
+        self._prefix = f"/{metadata.get('drone', 'drone1')}/"
+        world_text = attachments.get(WORLD_ATTACHMENT)
+        if world_text is not None:
+            with contextlib.suppress(WorldError):
+                self._world = parse_world(world_text.decode("utf-8", errors="replace"), "world")
+        self.stream.send_recording_name(self._label)
+        start_source(
+            self.stream,
+            self._layout,
+            {"file": self._label, **metadata},
+            self._world,
+            trajectory_color(0),
+        )
+
+    def channel_added(self, channel: ChannelInfo) -> None:
+        name = channel.topic.removeprefix(self._prefix)
+        self._channels[channel.id] = (channel, channel.schema_name == SERVICE_CALL or draws(name))
+
+    def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
+        channel, drawn = self._channels[channel_id]
+        converter = self._converter
+        if converter is not None and not drawn:
+            converter.pass_over(log_time_ns)  # not decoded: most of a flight's messages
+            return
+        record = decode_record(channel, log_time_ns, data)
+        if record is None:
+            return
+        if converter is None:
+            converter = self._converter = SessionConverter(
+                self.stream,
+                self._writer,
+                self._layout,
+                origin_ns=0 if self._sim else log_time_ns,
+                world=self._world,
+                color=trajectory_color(0),
+            )
+        converter.feed(record)
+        now = time.monotonic()
+        if now - self._sent >= RERUN_SEND_S:
+            self._writer.flush()
+            self._sent = now
+
+    def recording_closed(self) -> None:
+        if self._finished:
+            return
+        self._finished = True
+        if self._converter is not None:
+            self._converter.finish()
+        self._writer.flush()
+        self.stream.flush()
+
+    def close(self) -> None:
+        self.recording_closed()
+        self.stream.disconnect()
+
+
+class LiveView:
+    """Both servers, as one tap for the recorder and one observer of the session."""
+
+    def __init__(self, options: LiveOptions, label: str = "live") -> None:
+        self.options = options
+        self._executive: Executive | None = None
+        #: The mission script runs (an abort can stop it).
+        self._mission = False
+        self._abort_lock = threading.Lock()
+        self.foxglove = FoxgloveLive(options, self._request_abort)
+        self.rerun: RerunLive | None = None
+        try:
+            if options.rerun_port is not None:
+                self.rerun = RerunLive(options, label)
+        except BaseException:
+            self.foxglove.server.stop()
+            raise
+        self._closed = False
+
+    @property
+    def urls(self) -> tuple[str, str | None]:
+        return self.foxglove.url, self.rerun.url if self.rerun is not None else None
+
+    # -- RecordTap -------------------------------------------------------------------------
+    def recording_started(
+        self, metadata: Mapping[str, str], attachments: Mapping[str, bytes]
+    ) -> None:
+        self.foxglove.recording_started(metadata, attachments)
+        if self.rerun is not None:
+            self.rerun.recording_started(metadata, attachments)
+
+    def channel_added(self, channel: ChannelInfo) -> None:
+        self.foxglove.channel_added(channel)
+        if self.rerun is not None:
+            self.rerun.channel_added(channel)
+
+    def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
+        self.foxglove.message_written(channel_id, log_time_ns, data)
+        if self.rerun is not None:
+            self.rerun.message_written(channel_id, log_time_ns, data)
+
+    def recording_closed(self) -> None:
+        self.mission_ended()
+        self.foxglove.recording_closed()
+        if self.rerun is not None:
+            self.rerun.recording_closed()
+
+    # -- the session's observer --------------------------------------------------------------
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        return None
+
+    def on_topic(self, record: TopicRecord) -> None:
+        return None
+
+    def session_started(self, executive: Executive) -> None:
+        """The executive a viewer's abort stops; with `wait_viewer`, the mission waits
+        here for a viewer."""
+        self._executive = executive
+        self._mission = True
+        if self.options.wait_viewer:
+            vehicle = executive.vehicle
+            live = executive.clock.kind == "wall"  # a link to serve while it waits
+            self.foxglove.wait_for_viewer((lambda: vehicle.step(0.0)) if live else None)
+
+    def mission_ended(self) -> None:
+        """The mission is over (its ending may still run): nothing left to abort."""
+        with self._abort_lock:
+            self._mission = False
+
+    def session_ending(self, executive: Executive) -> None:
+        self.mission_ended()
+
+    def _request_abort(self) -> dict[str, object]:
+        """A viewer's `/abort_mission` (on the server's thread): the mission is stopped at
+        its next tick, and the session's ending (landing; `fly`: --on-exit) follows. Only
+        the first call aborts; once the mission is over there is nothing to abort."""
+        with self._abort_lock:
+            executive = self._executive
+            if executive is None or not self._mission:
+                return {"ok": False, "error": "no mission is running"}
+            self._mission = False
+            action = self.options.abort_action
+            executive.request_stop("aborted by a live viewer", action)
+        return {"ok": True, "action": action}
+
+    def close(self) -> None:
+        """Stop both servers (after a moment for the last messages to leave). Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self.foxglove.close()
+        finally:
+            if self.rerun is not None:
+                self.rerun.close()
+
+
+def loopback_or(allow_remote: bool) -> str:
+    """The address the live servers listen on: this machine only, unless allowed."""
+    return "0.0.0.0" if allow_remote else LOOPBACK
+
+
+__all__ = [
+    "DEFAULT_FOXGLOVE_PORT",
+    "DEFAULT_RERUN_PORT",
+    "LiveOptions",
+    "LiveView",
+    "loopback_or",
+]
