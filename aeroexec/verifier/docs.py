@@ -49,8 +49,9 @@ do not edit by hand. `aeroexec verify --list-rules` lists them, `aeroexec verify
 CODE` prints the same text.
 
 Codes by range: AX0xx suppression comments that silence nothing (ruff's RUF100); AX1xx
-are reported by the catalog loader and passed through by the verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility; AX5xx
-start order; AX6xx behavior properties; AX7xx missions (`--mission`; AX75x the signals
+are reported by the catalog loader and passed through by the verifier; AX2xx
+references; AX3xx capability consistency; AX4xx incompatibility; AX5xx start order;
+AX6xx behavior properties; AX7xx missions (`--mission`; AX75x the signals
 of their property files, `--spec`); AX8xx the Aerostack 4.x task catalogs of 2020-2021
 (AX80x from their loader, AX81x-AX82x rules, judged as the 2021 constraint-based
 coordinator, cvar-upm/coordinator_cbc, would); AX9xx the catalog against the behavior

@@ -39,7 +39,9 @@ EVERY = ("",)
 _UNUSED_DOC = """A suppression comment (`# noqa: AX711` in a mission, `# aeroexec:
 ignore[AX401]` in a catalog, or a bare one) that silences no finding of this run, as
 ruff's RUF100: the problem it was written for is gone (or was never on that line), and
-the comment would silently hide the next, different problem there. A code that names no
+the comment would silently hide the next, different problem there. In flight: nothing
+at first; then the new problem the comment hides on that line (a call a later edit
+breaks, a list a later edit empties) flies unreported. A code that names no
 rule is reported too. Codes of rules the run does not select count as unused, as in
 ruff (so select AX001 with the rules its comments name). Reported at the comment;
 `--fix` removes it (only the unused codes of a comment that still silences others; the
