@@ -85,6 +85,8 @@ class Directive:
     column: int
     codes: tuple[str, ...]
     alone: bool
+    #: The directive as written (`# noqa: AX711`).
+    text: str = ""
 
 
 class Suppressions:
@@ -127,14 +129,13 @@ class Suppressions:
             self._comments(file)
             for directive in self._directives[file]:
                 if any(c and UNUSED.code.startswith(c) for c in directive.codes):
-                    continue  # `noqa: AX001` keeps itself
+                    continue  # a comment naming AX001 keeps itself
                 used = self._used.get(directive, set())
                 where = "on this line or the next" if directive.alone else "on this line"
                 if directive.codes == EVERY:
                     if not used:
-                        yield _unused(
-                            directive, (), f"a blanket one that silences no finding {where}"
-                        )
+                        why = f"a blanket one that silences no finding {where}"
+                        yield _unused(directive, (directive.text,), why)
                     continue
                 if known is None:
                     known = tuple(rule.code for rule in all_rules())
@@ -191,5 +192,7 @@ def _read_directives(file: str) -> list[Directive]:
         match = DIRECTIVE.search(comment)
         if match is None:
             continue
-        found.append(Directive(file, row, column + match.start() + 1, codes_of(match), alone))
+        found.append(
+            Directive(file, row, column + match.start() + 1, codes_of(match), alone, match.group(0))
+        )
     return found
