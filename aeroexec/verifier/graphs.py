@@ -359,7 +359,7 @@ class CatalogGraphs:
         expansion = self.expansion(behavior)
         if not expansion or len(expansion) < 2:
             return None
-        defaults = set(self.defaults)
+        defaults = self.default_set
         new = [c for c in expansion if c not in defaults]
         seen: set[str] = set()
         for capability in new:
@@ -376,14 +376,20 @@ class CatalogGraphs:
         expansion = self.expansion(behavior)
         if not expansion or not self.defaults:
             return None
-        defaults = set(self.defaults)
+        defaults = self.default_set
+        conflicts_of = self.catalog.conflicts_of
         for capability in expansion:
             if capability in defaults:
                 continue
-            clash = self.catalog.conflicts_of(capability) & defaults
-            if clash:
-                return capability, min(clash)
+            conflicts = conflicts_of(capability)
+            if conflicts and not conflicts.isdisjoint(defaults):
+                return capability, min(conflicts & defaults)
         return None
+
+    @cached_property
+    def default_set(self) -> frozenset[str]:
+        """`defaults` as a set (asked about once per behavior)."""
+        return frozenset(self.defaults)
 
     @cached_property
     def activatable(self) -> frozenset[str]:

@@ -85,7 +85,7 @@ class Directive:
     column: int
     codes: tuple[str, ...]
     alone: bool
-    #: The directive as written (`# noqa: AX711`).
+    #: The directive as written, from its hash sign on.
     text: str = ""
 
 
