@@ -192,14 +192,18 @@ class _Open:
         "key_marks",
         "line",
         "mapping",
-        "size",
+        "start",
     )
 
-    def __init__(self, line: int, column: int, anchor: str | None, mapping: bool) -> None:
+    def __init__(
+        self, line: int, column: int, anchor: str | None, mapping: bool, start: int
+    ) -> None:
         self.line = line
         self.column = column
         self.anchor = anchor
-        self.size = 1
+        #: The node budget before this collection: what it spent by its end is its size
+        #: (itself, and everything in it, aliases at what they expand to).
+        self.start = start
         self.mapping = mapping
         self.items: dict[str, YNode] | list[YNode] = {} if mapping else []
         self.key_marks: dict[str, Mark] = {}
@@ -297,7 +301,6 @@ class _Builder:
                         value = self.scalar(event, Mark(file, line, column))
                 if event.anchor is None and parent is not None:
                     # The usual case, attached to its parent here.
-                    parent.size += 1
                     name = parent.key
                     if parent.mapping and name is None:  # a key: a name and a mark
                         parent.key = value if value.__class__ is str else str(value)
@@ -330,7 +333,7 @@ class _Builder:
                 closed = stack.pop()
                 parent = stack[-1] if stack else None
                 node = closed.close(file)
-                size = closed.size
+                size = closed.start - self.budget
                 if closed.anchor is not None:
                     self.open_anchors.discard(closed.anchor)
                     self.remember(closed.anchor, (node, size))
@@ -362,12 +365,11 @@ class _Builder:
                 if anchor is not None:
                     self.check_anchor(anchor, Mark(file, line, column))
                     self.open_anchors.add(anchor)
-                parent = _Open(line, column, anchor, mapping)
+                parent = _Open(line, column, anchor, mapping, self.budget + 1)
                 stack.append(parent)
                 continue
             if parent is None:
                 return node
-            parent.size += size
             if not parent.mapping:
                 parent.items.append(node)  # type: ignore[union-attr]
             elif parent.key is None:
