@@ -313,8 +313,12 @@ class CatalogGraphs:
                     result.setdefault(capability, []).append(name)
         return {k: tuple(v) for k, v in result.items()}
 
-    @cached_property
+    @property
     def model(self) -> ActivationModel:
+        """The activation model of these graphs. Made on each use (it keeps nothing of
+        its own), not cached: a cached one pointing back at the graphs would make a
+        reference cycle, and the whole catalog would outlive the run as garbage that only
+        the cyclic collector frees (after verify: ~1.4 s at exit for 30,000 behaviors)."""
         from aeroexec.verifier.witness import ActivationModel
 
         return ActivationModel(self)
