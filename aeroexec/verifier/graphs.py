@@ -380,6 +380,8 @@ class CatalogGraphs:
         expansion = self.expansion(behavior)
         if not expansion or not self.defaults:
             return None
+        if self.default_clashes.isdisjoint(expansion):
+            return None  # the usual behavior: one set look-up per capability
         defaults = self.default_set
         conflicts_of = self.catalog.conflicts_of
         for capability in expansion:
@@ -394,6 +396,15 @@ class CatalogGraphs:
     def default_set(self) -> frozenset[str]:
         """`defaults` as a set (asked about once per behavior)."""
         return frozenset(self.defaults)
+
+    @cached_property
+    def default_clashes(self) -> frozenset[str]:
+        """Capabilities, not default ones, incompatible with a default capability
+        (incompatibility is symmetric: those the defaults name)."""
+        clashes: set[str] = set()
+        for default in self.defaults:
+            clashes |= self.catalog.conflicts_of(default)
+        return frozenset(clashes - self.default_set)
 
     @cached_property
     def activatable(self) -> frozenset[str]:
