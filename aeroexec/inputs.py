@@ -15,6 +15,9 @@ instead of blocking forever in `open()`.
   listed, a match that is a symlink loop or dangling): `glob.glob` skips those in
   silence, so an unreadable `flights/` looked like "no match" and an unreadable
   subdirectory under `**` vanished from a check that then passed.
+* `pending_contents(contents)`: within it, the files it names read as the bytes it
+  gives (`verify --diff` runs its later fix passes on fixed contents it never writes);
+  `current_bytes(path)` reads a file as the readers here would.
 * `missing(path)`: why a path names no file ("no such file", "is a symlink loop",
   "is a dangling symlink"), for the one line that says so.
 
@@ -29,8 +32,11 @@ import fnmatch
 import glob
 import os
 import stat
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from aeroexec.errors import AeroexecError, Mark
 
@@ -113,6 +119,29 @@ def is_regular_file(path: str | os.PathLike[str]) -> bool:
         return False
 
 
+#: Path as named -> the bytes it reads as (`pending_contents`).
+_PENDING: ContextVar[Mapping[str, bytes] | None] = ContextVar("pending_contents", default=None)
+
+
+@contextmanager
+def pending_contents(contents: Mapping[str, bytes]) -> Iterator[None]:
+    """Within this block, the files `contents` names (as their path is written) read as
+    its bytes, on disk or not: a later change of `contents` shows at the next read."""
+    token = _PENDING.set(contents)
+    try:
+        yield
+    finally:
+        _PENDING.reset(token)
+
+
+def current_bytes(path: str | os.PathLike[str]) -> bytes:
+    """The file's bytes as `read_bytes` sees them (pending contents first), without
+    its checks: for a file already read once. `OSError` if it cannot be read now."""
+    contents = _PENDING.get()
+    pending = contents.get(str(path)) if contents is not None else None
+    return pending if pending is not None else Path(path).read_bytes()
+
+
 def read_bytes(
     path: str | os.PathLike[str],
     what: str,
@@ -121,6 +150,10 @@ def read_bytes(
 ) -> bytes:
     """The bytes of the regular file `path`, at most `limit` of them (else `error`)."""
     file = str(path)
+    contents = _PENDING.get()
+    pending = contents.get(file) if contents is not None else None
+    if pending is not None and len(pending) <= limit:
+        return pending
     fd = _open(path, what, error)
     too_large = f"too large for {what}: over {_size_text(limit)}"
     try:

@@ -18,7 +18,9 @@ something to report), then measures
   adding it costs — with microseconds per behavior at each size and the growth from
   10k to 30k (3.0 is linear).
 
-Target (issue 15): verify(30k) <= 2x the whole-process floor, and every rule linear.
+Target (issues 15 and 30): verify(30k) <= 2x the whole-process floor, with every rule
+of today (issue 30's checks included), and every rule linear; the margin this benchmark
+holds it to, so that a busy machine's noise does not cross the line, is <= 1.8x.
 Prints one line per figure (figure, baseline, ratio, target); exits 1 when the target
 is missed. Machines shared with others make every figure noisy: medians, and say so.
 
@@ -39,6 +41,8 @@ import time
 from pathlib import Path
 
 TARGET_RATIO = 2.0
+#: What verify is kept to, below the target: figures move 10-20 % on a shared machine.
+MARGIN_RATIO = 1.8
 #: Growth of a rule's time from 10k to 30k behaviors above which it is not called linear
 #: (3.0 is exactly linear; the margin covers cache effects and noise on a shared machine).
 LINEAR_GROWTH = 4.5
@@ -198,8 +202,12 @@ def run(sizes: list[int], repeat: int) -> int:
             verdict = ""
             if judged:
                 met = ratio <= TARGET_RATIO
-                ok &= met
-                verdict = f"; target <= {TARGET_RATIO:g}x: {'met' if met else 'MISSED'}"
+                kept = ratio <= MARGIN_RATIO
+                ok &= met and kept
+                verdict = (
+                    f"; target <= {TARGET_RATIO:g}x: {'met' if met else 'MISSED'}, "
+                    f"with margin <= {MARGIN_RATIO:g}x: {'met' if kept else 'MISSED'}"
+                )
             print(
                 f"{size:>6} behaviors ({mb:.1f} MB): verify whole process {verified:.2f} s CPU; "
                 f"baseline PyYAML C loader, collector off {floor:.2f} s CPU; ratio "

@@ -198,3 +198,92 @@ def test_a_tree_too_deep_to_follow_is_refused_quickly(tmp_path: Path) -> None:
     assert f"{mission}:602:5: error: node 201: the tree is nested deeper than 200 levels" in (
         result.output
     )
+
+
+# -- control nodes as Aerostack's behavior-tree interpreter runs them ------------------------
+def tree(*nodes: tuple[int, int, str, str, str | None, bool]) -> str:
+    """A mission: (number, parent, type, subtype, task, wait_for_completion) per node."""
+    lines = ["nodes:"]
+    for number, parent, kind, subtype, task, wait in nodes:
+        lines += [
+            f"  - node: {number}",
+            f"    name: n{number}",
+            f"    type: {kind}",
+            f"    subtype: {subtype}",
+            f"    parent: {parent}",
+        ]
+        if task is not None:
+            lines += [f"    task: {task}", f"    wait_for_completion: {str(wait).lower()}"]
+    return "\n".join(lines) + "\n"
+
+
+def task(number: int, parent: int, name: str, wait: bool = True) -> tuple:
+    return (number, parent, "execution", "task", name, wait)
+
+
+def control(number: int, parent: int, subtype: str) -> tuple:
+    return (number, parent, "control_flow", subtype, None, True)
+
+
+def test_a_fallback_that_takes_a_rejected_start_is_not_a_failed_mission(tmp_path: Path) -> None:
+    # TAKE_OFF is always rejected by this catalog; a fallback tries HOVER then, which
+    # the coordinator accepts: the mission goes on. The same start in a sequence fails
+    # the mission (AX717).
+    catalog = BT / "AX717_catalog.yaml"
+    handled = tmp_path / "handled.yaml"
+    handled.write_text(
+        tree(
+            control(1, 0, "sequence"),
+            control(2, 1, "fallback"),
+            task(3, 2, "TAKE_OFF"),
+            task(4, 2, "HOVER"),
+        )
+    )
+    assert [r for r, _, _ in about(findings(catalog, handled), handled)] == []
+    unhandled = tmp_path / "unhandled.yaml"
+    unhandled.write_text(tree(control(1, 0, "sequence"), task(2, 1, "TAKE_OFF")))
+    assert [r for r, _, _ in about(findings(catalog, unhandled), unhandled)] == ["AX717"]
+    # Under a fallback whose every child is rejected, the failure reaches the root.
+    both = tmp_path / "both.yaml"
+    both.write_text(tree(control(1, 0, "fallback"), task(2, 1, "TAKE_OFF"), task(3, 1, "TAKE_OFF")))
+    assert ("AX717", ("TAKE_OFF",)) in [(r, s) for r, _, s in about(findings(catalog, both), both)]
+
+
+def test_a_fallback_child_starts_from_what_the_failed_one_left(tmp_path: Path) -> None:
+    # The first child starts TAKE_OFF without waiting, then fails (its MOVE_VERTICAL,
+    # waited for, may fail). The fallback's second child then starts ROTATE while
+    # TAKE_OFF still runs: the coordinator stops TAKE_OFF (AX716). Alternatives taken
+    # from the fallback's own starting state would not see TAKE_OFF running.
+    mission = tmp_path / "fallback.yaml"
+    mission.write_text(
+        tree(
+            control(1, 0, "fallback"),
+            control(2, 1, "sequence"),
+            task(3, 2, "TAKE_OFF", wait=False),
+            task(4, 2, "WAIT"),
+            task(5, 1, "ROTATE"),
+        ).replace("task: WAIT", 'task: WAIT\n    parameters: "duration: 1"')
+    )
+    found = about(findings(CATALOG, mission), mission)
+    assert ("AX716", ("TAKE_OFF", "ROTATE")) in [(r, s) for r, _, s in found]
+    # Waiting for TAKE_OFF: it ended before anything else started.
+    waited = tmp_path / "waited.yaml"
+    waited.write_text(
+        mission.read_text().replace("wait_for_completion: false", "wait_for_completion: true")
+    )
+    assert about(findings(CATALOG, waited), waited) == []
+
+
+def test_a_parallel_starts_its_tasks_together(tmp_path: Path) -> None:
+    # Waited for or not, the children of a parallel start in the same tick: two
+    # mutually exclusive tasks there stop each other; in a sequence, waited, they do not.
+    parallel = tmp_path / "parallel.yaml"
+    parallel.write_text(
+        tree(control(1, 0, "parallel"), task(2, 1, "TAKE_OFF"), task(3, 1, "ROTATE"))
+    )
+    assert [(r, s) for r, _, s in about(findings(CATALOG, parallel), parallel)] == [
+        ("AX716", ("TAKE_OFF", "ROTATE"))
+    ]
+    sequence = tmp_path / "sequence.yaml"
+    sequence.write_text(parallel.read_text().replace("subtype: parallel", "subtype: sequence"))
+    assert about(findings(CATALOG, sequence), sequence) == []

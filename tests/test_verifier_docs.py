@@ -28,7 +28,7 @@ def test_every_rule_has_a_paragraph_with_flight_effect_and_fix() -> None:
 
 
 def test_codes_follow_the_ranges() -> None:
-    kinds = {"AX1": "loader", "AX7": "mission", "AX9": "code"}
+    kinds = {"AX0": "suppression", "AX1": "loader", "AX7": "mission", "AX9": "code"}
     for rule in all_rules():
         assert len(rule.code) == 5 and rule.code.startswith("AX")
         kind = kinds.get(rule.code[:3], "catalog")

@@ -18,7 +18,7 @@ from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.catalog.tasks import TaskCatalog
 from aeroexec.plugins import BehaviorSet, BehaviorSources, discover
 from aeroexec.properties.spec import load_properties
-from aeroexec.verifier import Finding, Rule, all_rules, check_mission
+from aeroexec.verifier import Finding, Rule, all_rules, check_mission, verify
 from aeroexec.verifier.bt_missions import check_bt_mission, read_bt_mission
 from aeroexec.verifier.engine import check_any_catalog
 from aeroexec.verifier.missions import read_mission
@@ -92,6 +92,8 @@ def findings_of(path: Path, rule: Rule | None = None) -> list[Finding]:
         catalog = read_any_catalog(TREES / first.removeprefix("# catalog:").strip())
         assert isinstance(catalog, TaskCatalog)
         return check_bt_mission(read_bt_mission(str(path)), catalog)
+    if rule is not None and rule.kind == "suppression":  # decided over a whole run
+        return list(verify([str(path)]).findings)
     behaviors = code_behaviors() if rule is not None and rule.kind == "code" else None
     return check_any_catalog(read_any_catalog(path), behaviors=behaviors)
 

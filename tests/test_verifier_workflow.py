@@ -292,3 +292,115 @@ def test_fix_adds_a_one_sided_preemptor_to_its_list(
     assert "AX401" not in result.output, result.output
     assert "2 fixes applied in 1 file" in result.output
     assert catalog.read_text() == source.replace(members, fixed)
+
+
+UNUSED_MISSION = """\
+from executive_engine_api import execute_behavior
+
+
+def runMission():
+    execute_behavior('TAKE_OFF')  # noqa: AX711
+    execute_behavior('TAKE_OF')  # noqa: AX701, AX999
+    # noqa
+    execute_behavior('LAND')
+    execute_behavior('LAND')  # why  # noqa: AX001
+"""
+
+
+def test_an_unused_suppression_is_reported_and_fix_removes_it(project: Path) -> None:
+    # As ruff's RUF100: a noqa that silences nothing, a code that names no rule, a
+    # blanket noqa (alone on its line: it covers the next one) with nothing to silence.
+    # One that silences something stays; one naming AX001 keeps itself.
+    mission = project / "missions" / "flight.py"
+    mission.write_text(UNUSED_MISSION)
+    result = runner.invoke(app, ["verify", "behaviors.yaml", "-m", "missions/flight.py"])
+    unused = [line for line in result.output.splitlines() if " AX001 " in line]
+    assert unused == [
+        "missions/flight.py:5:35: warning AX001 unused suppression: AX711 silences no "
+        "finding on this line",
+        "missions/flight.py:6:34: warning AX001 unused suppression: AX999 is not a rule code",
+        "missions/flight.py:7:5: warning AX001 unused suppression: a blanket one that "
+        "silences no finding on this line or the next",
+    ]
+    assert ("AX701", 6) not in verify("behaviors.yaml", "-m", "missions/flight.py")
+    ignored = verify("behaviors.yaml", "-m", "missions/flight.py", "--ignore", "AX001")
+    assert not [rule for rule, _ in ignored if rule == "AX001"]
+    fixed = runner.invoke(app, ["verify", "behaviors.yaml", "-m", "missions/flight.py", "--fix"])
+    assert "3 fixes applied in 1 file" in fixed.output, fixed.output
+    assert mission.read_text() == UNUSED_MISSION.replace("  # noqa: AX711", "").replace(
+        "AX701, AX999", "AX701"
+    ).replace("    # noqa\n", "")
+    assert " AX001 " not in fixed.output
+    # In a catalog: only the unused code goes, the comment still silences AX401.
+    catalog = project / "catalog.yaml"
+    catalog.write_text(
+        catalog.read_text().replace(
+            "  - behavior: GO_TO  # expect AX401 at behavior",
+            "  - behavior: GO_TO  # aeroexec: ignore[AX401, AX2]",
+        )
+    )
+    assert ("AX001", 6) in verify("catalog.yaml")
+    runner.invoke(app, ["verify", "catalog.yaml", "--fix"])
+    assert "  - behavior: GO_TO  # aeroexec: ignore[AX401]\n" in catalog.read_text()
+    assert ("AX001", 6) not in verify("catalog.yaml")
+
+
+CHAIN = """\
+behavior_descriptors:
+  - behavior: DOCK
+    timeout: 10
+    recurrent: no
+    incompatible_lists: [motion]
+    capabilities: [ARM]
+  - behavior: GO_TO
+    timeout: 10
+    recurrent: no
+    capabilities: [WHEELS]  # aeroexec: ignore[AX304]
+behavior_lists:
+  - list: motion
+    behaviors: [GO_TO]
+  - list: docking
+    behaviors: [DOCK]
+capability_descriptors:
+  - capability: ARM
+    active_by_default: no
+    processes: [arm]
+    incompatible_capabilities: [WHEELS]
+  - capability: WHEELS
+    active_by_default: no
+    processes: [wheels]
+    incompatible_capabilities: [ARM]
+"""
+
+
+def test_diff_and_fix_run_the_fixes_a_fix_makes_possible(project: Path) -> None:
+    # Pass 1: GO_TO, preempted one-sidedly by DOCK, names DOCK's list (AX401's fix);
+    # that makes the conflict declared, so the ignore[AX304] on GO_TO's line silences
+    # nothing any more: pass 2 removes it (AX001's fix). --diff shows both passes'
+    # result and writes nothing; --fix writes exactly that.
+    catalog = project / "chain.yaml"
+    catalog.write_text(CHAIN)
+    fixed = CHAIN.replace(
+        "    capabilities: [WHEELS]  # aeroexec: ignore[AX304]\n",
+        "    capabilities: [WHEELS]\n    incompatible_lists: [docking]\n",
+    )
+    shown = runner.invoke(app, ["verify", "chain.yaml", "--diff"])
+    assert shown.exit_code == 1
+    assert "-    capabilities: [WHEELS]  # aeroexec: ignore[AX304]\n" in shown.output
+    assert "+    capabilities: [WHEELS]\n+    incompatible_lists: [docking]\n" in shown.output
+    assert "2 fixes in 1 file would apply (2 passes" in shown.output
+    assert catalog.read_text() == CHAIN
+    result = runner.invoke(app, ["verify", "chain.yaml", "--fix"])
+    assert result.exit_code == 0, result.output
+    assert catalog.read_text() == fixed
+    assert "2 fixes applied in 1 file" in result.output
+
+
+def test_diff_shows_fixes_of_the_same_line_from_later_passes(project: Path) -> None:
+    # DOCK and PARK both join `motion`: the second fix touches the same line and waits
+    # for a second pass, which --diff runs too (in memory).
+    catalog = project / "movers.yaml"
+    catalog.write_text(PREEMPTOR)
+    shown = runner.invoke(app, ["verify", "movers.yaml", "--diff"])
+    assert "+    behaviors: [GO_TO, SPIN, DOCK, PARK]  # the movers\n" in shown.output
+    assert catalog.read_text() == PREEMPTOR

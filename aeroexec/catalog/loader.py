@@ -276,12 +276,19 @@ class _CatalogReader:
         # a million names long costs the names and eight bytes each.
         names: list[str] = []
         marks = PackedMarks(node.file)
+        lines, columns = marks.lines, marks.columns
+        intern = sys.intern
         for item in items:
-            name = self.name_of(item, f"an entry of {what}", *subjects)
-            if name is not None:
-                names.append(name)
-                marks.lines.append(item.line)
-                marks.columns.append(item.column)
+            value = item.value
+            if value.__class__ is str and value:  # the usual name, without a call
+                name: str | None = intern(value)
+            else:
+                name = self.name_of(item, f"an entry of {what}", *subjects)
+                if name is None:
+                    continue
+            names.append(name)  # type: ignore[arg-type]
+            lines.append(item.line)
+            columns.append(item.column)
         return NameRefs(tuple(names), marks)
 
     def boolean(self, node: YNode, what: str, *subjects: str) -> bool | None:

@@ -66,8 +66,10 @@ class Marks(Mapping[str, Mark]):
         fields: Mapping[str, Mark] | None = None,
         items: Mapping[str, Sequence[Mark]] | None = None,
     ) -> None:
-        self._fields = dict(fields or {})
-        self._items = dict(items or {})
+        # A dict is kept as given, not copied (the loader builds one per entry, and a
+        # YAML mapping's key marks never change once read): the caller hands it over.
+        self._fields = fields if type(fields) is dict else dict(fields or {})
+        self._items = items if type(items) is dict else dict(items or {})
 
     def __getitem__(self, key: str) -> Mark:
         mark = self.get(key)
@@ -274,10 +276,15 @@ class Catalog:
             name: frozenset(lst.behaviors) for name, lst in self.lists.items()
         }
         preempts: dict[str, frozenset[str]] = {}
+        nothing: frozenset[str] = frozenset()
         for name, behavior in self.behaviors.items():
+            named = behavior.incompatible_lists
+            if len(named) == 1:  # the usual case: the list's own set, shared
+                preempts[name] = members.get(named[0], nothing)
+                continue
             victims: set[str] = set()
-            for list_name in behavior.incompatible_lists:
-                victims |= members.get(list_name, frozenset())
+            for list_name in named:
+                victims |= members.get(list_name, nothing)
             preempts[name] = frozenset(victims)
         conflicts: dict[str, set[str]] = {name: set() for name in self.capabilities}
         for name, capability in self.capabilities.items():

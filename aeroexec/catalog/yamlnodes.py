@@ -76,12 +76,13 @@ class YNode:
     #: them with "TRUE", so `allowed_values: [ON, OFF]` are two symbols there.
     raw: str | None = None
 
-    def __init__(self, value: Any, mark: Mark) -> None:
+    def __init__(self, value: Any, file: str, line: int, column: int) -> None:
+        # The mark's parts, not a Mark: one object less per node (and no frozen
+        # dataclass's __init__ per scalar while loading); `mark` builds it when asked.
         self.value = value
-        # The mark's parts, not the Mark: one object less per node; `mark` builds it.
-        self.file = mark.file
-        self.line = mark.line
-        self.column = mark.column
+        self.file = file
+        self.line = line
+        self.column = column
 
     @staticmethod
     def at(
@@ -92,11 +93,12 @@ class YNode:
         raw: str | None = None,
     ) -> YNode:
         """A node of the class its extras need (a mapping's keys, a boolean's text)."""
+        where = (mark.file, mark.line, mark.column)
         if key_marks is not None or duplicate_keys:
-            return _YMapping(value, mark, key_marks, duplicate_keys)
+            return _YMapping(value, *where, key_marks, duplicate_keys)
         if raw is not None:
-            return _YWord(value, mark, raw)
-        return YNode(value, mark)
+            return _YWord(value, *where, raw)
+        return YNode(value, *where)
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, YNode):
@@ -152,11 +154,13 @@ class _YMapping(YNode):
     def __init__(
         self,
         value: Any,
-        mark: Mark,
+        file: str,
+        line: int,
+        column: int,
         key_marks: dict[str, Mark] | None = None,
         duplicate_keys: tuple[tuple[str, Mark], ...] = (),
     ) -> None:
-        super().__init__(value, mark)
+        super().__init__(value, file, line, column)
         self.key_marks = {} if key_marks is None else key_marks
         self.duplicate_keys = duplicate_keys
 
@@ -166,8 +170,8 @@ class _YWord(YNode):
 
     __slots__ = ("raw",)
 
-    def __init__(self, value: Any, mark: Mark, raw: str | None = None) -> None:
-        super().__init__(value, mark)
+    def __init__(self, value: Any, file: str, line: int, column: int, raw: str | None) -> None:
+        super().__init__(value, file, line, column)
         self.raw = raw
 
 
@@ -178,22 +182,43 @@ def _mark(file: str, mark: Any) -> Mark:
 class _Open:
     """A sequence or mapping whose end event has not arrived yet."""
 
-    __slots__ = ("anchor", "duplicates", "items", "key", "key_marks", "mapping", "mark", "size")
+    __slots__ = (
+        "anchor",
+        "column",
+        "duplicates",
+        "items",
+        "key",
+        "key_mark",
+        "key_marks",
+        "line",
+        "mapping",
+        "start",
+    )
 
-    def __init__(self, mark: Mark, anchor: str | None, mapping: bool) -> None:
-        self.mark = mark
+    def __init__(
+        self, line: int, column: int, anchor: str | None, mapping: bool, start: int
+    ) -> None:
+        self.line = line
+        self.column = column
         self.anchor = anchor
-        self.size = 1
+        #: The node budget before this collection: what it spent by its end is its size
+        #: (itself, and everything in it, aliases at what they expand to).
+        self.start = start
         self.mapping = mapping
         self.items: dict[str, YNode] | list[YNode] = {} if mapping else []
         self.key_marks: dict[str, Mark] = {}
         self.duplicates: list[tuple[str, Mark]] = []
-        self.key: YNode | None = None  # a mapping's key, waiting for its value
+        # A mapping's key waiting for its value (None: the next scalar is a key): its
+        # name and mark only, no node of its own.
+        self.key: str | None = None
+        self.key_mark: Mark | None = None
 
-    def close(self) -> YNode:
+    def close(self, file: str) -> YNode:
         if not self.mapping:
-            return YNode(self.items, self.mark)
-        return _YMapping(self.items, self.mark, self.key_marks, tuple(self.duplicates))
+            return YNode(self.items, file, self.line, self.column)
+        return _YMapping(
+            self.items, file, self.line, self.column, self.key_marks, tuple(self.duplicates)
+        )
 
 
 class _Builder:
@@ -233,7 +258,8 @@ class _Builder:
         """Build the next node from the events, without recursion.
 
         The hot loop of loading a large catalog: one pass per event, so the common cases
-        (scalars, collection ends) are written out inline.
+        (scalars, mapping keys, collection ends) are written out inline, and a node
+        keeps its line and column without a `Mark` built for it.
         """
         get_event = self.loader.get_event
         file = self.file
@@ -247,15 +273,17 @@ class _Builder:
         implicit_resolvers = self.loader.yaml_implicit_resolvers
         plain_words = None not in implicit_resolvers  # no resolver for every text
         stack: list[_Open] = []
+        parent: _Open | None = None  # stack[-1]
+        node: YNode
         while True:
             event = get_event()
             kind = type(event)
             if kind is scalar_event:
                 start = event.start_mark
-                mark = Mark(file, start.line + 1, start.column + 1)
+                line, column = start.line + 1, start.column + 1
                 self.budget -= 1
                 if self.budget < 0:
-                    self.spend(0, mark)
+                    self.spend(0, Mark(file, line, column))
                 text = event.value
                 if (
                     plain_words
@@ -267,19 +295,45 @@ class _Builder:
                     value = text  # a plain word no implicit type can start with: a str
                 else:
                     key = (event.tag, text, event.implicit)
-                    value = scalars[key] if key in scalars else self.scalar(event, mark)
+                    if key in scalars:
+                        value = scalars[key]
+                    else:
+                        value = self.scalar(event, Mark(file, line, column))
+                if event.anchor is None and parent is not None:
+                    # The usual case, attached to its parent here.
+                    name = parent.key
+                    if parent.mapping and name is None:  # a key: a name and a mark
+                        parent.key = value if value.__class__ is str else str(value)
+                        parent.key_mark = Mark(file, line, column)
+                        continue
+                    node = (
+                        _YWord(value, file, line, column, text)
+                        if value is True or value is False
+                        else YNode(value, file, line, column)
+                    )
+                    if not parent.mapping:
+                        parent.items.append(node)  # type: ignore[union-attr]
+                        continue
+                    items = parent.items
+                    if name in items:
+                        parent.duplicates.append((name, parent.key_mark))  # type: ignore[arg-type]
+                    items[name] = node  # type: ignore[call-overload]
+                    parent.key_marks[name] = parent.key_mark  # type: ignore[assignment]
+                    parent.key = None
+                    continue
                 node = (
-                    _YWord(value, mark, event.value)
+                    _YWord(value, file, line, column, text)
                     if value is True or value is False
-                    else YNode(value, mark)
+                    else YNode(value, file, line, column)
                 )
                 size = 1
                 if event.anchor is not None:
                     self.remember(event.anchor, (node, 1))
             elif kind in end_events:
                 closed = stack.pop()
-                node = closed.close()
-                size = closed.size
+                parent = stack[-1] if stack else None
+                node = closed.close(file)
+                size = closed.start - self.budget
                 if closed.anchor is not None:
                     self.open_anchors.discard(closed.anchor)
                     self.remember(closed.anchor, (node, size))
@@ -295,40 +349,43 @@ class _Builder:
             else:  # SequenceStartEvent / MappingStartEvent
                 mapping = kind is mapping_start
                 start = event.start_mark
-                mark = Mark(file, start.line + 1, start.column + 1)
+                line, column = start.line + 1, start.column + 1
                 self.budget -= 1
                 if self.budget < 0:
-                    self.spend(0, mark)
+                    self.spend(0, Mark(file, line, column))
                 if event.tag is not None:  # an untagged collection is a map or a seq
-                    self.collection_tag(event, mapping, mark)
-                if stack and stack[-1].key is None and stack[-1].mapping:
-                    raise CatalogError("a mapping key must be a scalar", mark)
+                    self.collection_tag(event, mapping, Mark(file, line, column))
+                if parent is not None and parent.key is None and parent.mapping:
+                    raise CatalogError("a mapping key must be a scalar", Mark(file, line, column))
                 if len(stack) >= MAX_DEPTH:
-                    raise CatalogError(f"nested more than {MAX_DEPTH} levels deep", mark)
+                    raise CatalogError(
+                        f"nested more than {MAX_DEPTH} levels deep", Mark(file, line, column)
+                    )
                 anchor = event.anchor
                 if anchor is not None:
-                    self.check_anchor(anchor, mark)
+                    self.check_anchor(anchor, Mark(file, line, column))
                     self.open_anchors.add(anchor)
-                stack.append(_Open(mark, anchor, mapping))
+                parent = _Open(line, column, anchor, mapping, self.budget + 1)
+                stack.append(parent)
                 continue
-            if not stack:
+            if parent is None:
                 return node
-            parent = stack[-1]
-            parent.size += size
             if not parent.mapping:
                 parent.items.append(node)  # type: ignore[union-attr]
             elif parent.key is None:
                 if isinstance(node.value, (dict, list)):
                     raise CatalogError("a mapping key must be a scalar", node.mark)
-                parent.key = node
+                parent.key = str(node.value)
+                parent.key_mark = node.mark
             else:
-                key_node = parent.key
-                name = str(key_node.value)
+                name = parent.key
                 items = parent.items
+                key_mark = parent.key_mark
+                assert key_mark is not None
                 if name in items:
-                    parent.duplicates.append((name, key_node.mark))
+                    parent.duplicates.append((name, key_mark))
                 items[name] = node  # type: ignore[call-overload]
-                parent.key_marks[name] = key_node.mark
+                parent.key_marks[name] = key_mark
                 parent.key = None
 
     def alias(self, event: Any) -> tuple[YNode, int]:

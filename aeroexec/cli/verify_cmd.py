@@ -38,7 +38,7 @@ from aeroexec.outputs import whole_file_or_none
 from aeroexec.vehicles.world import load_world
 from aeroexec.verifier import verify
 from aeroexec.verifier.findings import InputError, Report
-from aeroexec.verifier.fixes import fixed_files, fixes_for, unified_diff
+from aeroexec.verifier.fixes import fix_until_stable, unified_diff
 from aeroexec.verifier.registry import all_rules, get, suggest_code
 from aeroexec.verifier.report import render
 from aeroexec.verifier.selection import RuleSelection, SelectionLayer, split_selectors
@@ -283,30 +283,26 @@ def verify_command(
 
     report = run()
     if fix or diff:
-        fixes = fixes_for(report.findings)
-        changes = fixed_files(fixes)
+        # As ruff does: fixes again until none is left (a fix can make another
+        # possible; fixes of the same lines wait for the next pass), in memory.
+        fixed = fix_until_stable(run, report)
         if diff:
-            typer.echo("".join(unified_diff(f, *change) for f, change in changes.items()), nl=False)
+            shown = (unified_diff(f, fixed.before[f], after) for f, after in fixed.after.items())
+            typer.echo("".join(shown), nl=False)
             say(
                 "note",
-                f"{_plural(len(fixes), 'fix')} in {_plural(len(changes), 'file')} would apply "
-                "(--fix applies them, and the fixes they make possible)",
+                f"{_plural(fixed.applied, 'fix')} in {_plural(len(fixed.after), 'file')} would "
+                f"apply ({_plural(fixed.passes, 'pass')}; --fix applies them)",
             )
-            raise typer.Exit(1 if changes else 0)
-        applied, touched = 0, set()
-        # As ruff does: fixes of the same lines wait for the next pass.
-        for _ in range(FIX_PASSES):
-            if not changes:
-                break
-            for file, (_, after) in changes.items():
-                write_fixed(Path(file), after)
-            applied += len(fixes)
-            touched.update(changes)
-            report = run()
-            fixes = fixes_for(report.findings)
-            changes = fixed_files(fixes)
-        if applied:
-            say("note", f"{_plural(applied, 'fix')} applied in {_plural(len(touched), 'file')}")
+            raise typer.Exit(1 if fixed.after else 0)
+        for file, after in fixed.after.items():
+            write_fixed(Path(file), after)
+        report = fixed.report
+        if fixed.after:
+            say(
+                "note",
+                f"{_plural(fixed.applied, 'fix')} applied in {_plural(len(fixed.after), 'file')}",
+            )
     shown = report.at_least(threshold)
     styled = use_color(color)
     if statistics:
@@ -341,12 +337,9 @@ def signal_uses(specs: list[str]) -> tuple[list[SignalUse], list[InputError]]:
     return uses, errors
 
 
-#: Passes of --fix at most (a pass applies the fixes that touch distinct lines).
-FIX_PASSES = 10
-
-
 def _plural(count: int, word: str) -> str:
-    return f"{count} {word}{'' if count == 1 else 'es' if word.endswith('x') else 's'}"
+    plural = "es" if word.endswith(("x", "s")) else "s"
+    return f"{count} {word}{'' if count == 1 else plural}"
 
 
 def write_fixed(path: Path, content: bytes) -> None:

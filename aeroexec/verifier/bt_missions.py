@@ -10,16 +10,20 @@ never run. Each execution node is checked as a mission call is:
 * AX702 each parameter is one the task declares;
 * AX703 a value fits the declared range, words or type; AX704 a point has 3 numbers.
 
-Then the tree is run as a sequence on the same model of the 2021 task coordinator the
-task rules and witnesses use (`task_model.TaskModel`): children of a `sequence` in
-order, each `start_task` from the state the previous ones left, a task waited for
-(`wait_for_completion: true`, an `achieve_goal` task) ending before the next node; the
-children of any other control node are explored as alternatives, each from the same
-state. The sequence checks:
+Then the tree is run on the same model of the 2021 task coordinator the task rules and
+witnesses use (`task_model.TaskModel`), with the control nodes of Aerostack's
+behavior-tree interpreter (`_TreeRun`): each node succeeds or fails; a sequence runs its
+children in order while they succeed, a fallback while they fail (the next child from
+the state the failed one left), a parallel starts its children's tasks together, and
+inverter, succeeder, repeater and repeat-until-fail change or repeat what their child
+gives. A task waited for (`wait_for_completion: true`) ends before the next node (an
+`achieve_goal` task reaches its goal; any may fail); one not waited for keeps running.
+The sequence checks:
 
 * AX716 a task started without waiting for it is stopped by a later node's task (a
   mutually exclusive one) before it could end;
-* AX717 the coordinator rejects a node's `start_task` in the state the tree leaves.
+* AX717 the coordinator rejects a node's `start_task` in the state the tree leaves, and
+  no fallback, inverter or succeeder above it takes the failure: the mission fails.
 
 Against a behavior catalog (the 2017/2.x generation, whose behaviors the executive
 runs), the tree becomes the flow a Python mission folds to (`as_folded`): a node
@@ -31,6 +35,7 @@ executive (AX701-AX715).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -67,11 +72,12 @@ TASK_INTERRUPTED = mission_rule(
     "bt-task-interrupted",
     W,
     """In a behavior-tree mission, a node starts a task without waiting for it
-    (`wait_for_completion: false`) and a later node of the sequence starts a task that
-    is mutually exclusive with it: the coordinator stops the first task at once. In
+    (`wait_for_completion: false`, or any task child of a `parallel` node, whose
+    children start together) and a later node starts a task that is mutually exclusive
+    with it: the coordinator stops the first task at once. In
     flight: the first task hardly runs (a TAKE_OFF stopped by the next motion task
     leaves the vehicle on the ground). Fix: set `wait_for_completion: true` on the first
-    node, or put the two in a `parallel` node if they really should overlap.""",
+    node; tasks that must overlap cannot be mutually exclusive.""",
 ).code
 TASK_REJECTED = mission_rule(
     "AX717",
@@ -80,8 +86,10 @@ TASK_REJECTED = mission_rule(
     """In a behavior-tree mission, the 2021 task coordinator (as the task rules model
     it) rejects a node's `start_task` in the state the nodes before it leave: no
     assignment of behaviors satisfies the catalog's exclusivity constraints and
-    requirements. In flight: the node fails, and its sequence with it. Fix: stop the
-    conflicting task first, or change the catalog's constraints.""",
+    requirements. Not reported when a fallback above the node tries another child
+    then (or an inverter or succeeder takes the failure): that is what they are for.
+    In flight: the node fails, its sequence with it, and the mission ends there. Fix:
+    stop the conflicting task first, or change the catalog's constraints.""",
 ).code
 
 _TYPE_DIMENSIONS = {"point": 3}
@@ -401,12 +409,53 @@ class _Way:
     #: task -> the node that started it without waiting for its end.
     unwaited: dict[str, BtNode] = field(default_factory=dict)
     steps: tuple[PathStep, ...] = ()
+    #: The start the coordinator rejected, and why, while this way's failure is not yet
+    #: handled (by a fallback's next child, an inverter, a succeeder...).
+    rejected: tuple[BtNode, str] | None = None
 
     def fork(self) -> _Way:
-        return _Way(self.state, dict(self.unwaited), self.steps)
+        return _Way(self.state, dict(self.unwaited), self.steps, self.rejected)
+
+    def handled(self) -> _Way:
+        self.rejected = None
+        return self
+
+
+#: Ways through a tree followed at most (each fallback can double them).
+MAX_WAYS = 32
+
+#: Control nodes whose children run one after the other, each once the one before it
+#: succeeded (the interpreter's sequence; BehaviorTree.CPP's reactive sequence starts
+#: the same tasks in the same order).
+_SEQUENCES = ("sequence", "reactive_sequence", "reactivesequence", "")
+_FALLBACKS = ("fallback", "selector", "reactive_fallback", "reactivefallback")
 
 
 class _TreeRun:
+    """The tree run on the coordinator's model, as Aerostack's behavior-tree interpreter
+    (aerostack/behavior_tree_interpreter, 2021) runs it: every node ends in success or
+    failure, and each way through the tree is followed with its outcome —
+
+    * a task node fails when the coordinator rejects its start; once started, a task
+      waited for may also fail (its behavior stops without reaching its goal), which
+      leaves the task stopped;
+    * a sequence runs its children in order while they succeed, and fails with the
+      first that fails (the later ones do not run on that way);
+    * a fallback (selector) runs its children in order while they fail: the next child
+      starts from the state the failed one left, and the fallback succeeds with the
+      first that succeeds, or fails when all did;
+    * a parallel starts its children together: the tasks of its task children overlap
+      (none is waited for before the next starts);
+    * an inverter swaps success and failure, a succeeder always succeeds, a repeater
+      runs its child again (twice here: what a second round starts in the state of the
+      first is what can go wrong), a repeat-until-fail succeeds when its child fails.
+
+    AX717 is reported when a rejected start fails the whole mission: not when a
+    fallback's next child, an inverter or a succeeder takes that failure (trying an
+    alternative is what a fallback is for). AX716 is reported where a started task is
+    stopped at once by a later start, whatever happens after.
+    """
+
     def __init__(self, catalog: TaskCatalog, note: str) -> None:
         self.catalog = catalog
         self.model = TaskModel(catalog)
@@ -415,25 +464,72 @@ class _TreeRun:
 
     def run(self, mission: BtMission) -> list[Finding]:
         ways = [_Way()]
-        for root in mission.roots:
-            ways = self.visit(root, ways)
+        failed: list[_Way] = []
+        for root in mission.roots:  # several roots: run one after the other
+            ways, failures = self.visit(root, ways)
+            failed.extend(failures)
+        for way in failed:
+            if way.rejected is not None:
+                node, reason = way.rejected
+                task = node.task or ""
+                self.report(
+                    TASK_REJECTED,
+                    E,
+                    f"{node.shown}: start_task({task}) is rejected: {reason}; the mission "
+                    "fails there",
+                    node,
+                    way,
+                    task,
+                )
         return list(self.findings.values())
 
-    def visit(self, node: BtNode, ways: list[_Way]) -> list[_Way]:
+    def visit(self, node: BtNode, ways: list[_Way]) -> tuple[list[_Way], list[_Way]]:
+        """(the ways on which `node` succeeds, those on which it fails)."""
+        if not ways:
+            return [], []
         if node.kind == "execution":
+            succeeded: list[_Way] = []
+            failed: list[_Way] = []
             for way in ways:
-                self.start(node, way)
-            return ways
-        if node.subtype in ("sequence", "parallel", "") or len(node.children) <= 1:
-            for child in node.children:
-                ways = self.visit(child, ways)
-            return ways
-        # A fallback/selector (or a control node this model does not know): each child
-        # may be the one that runs, from the same state.
-        out: list[_Way] = []
-        for child in node.children:
-            out.extend(self.visit(child, [w.fork() for w in ways]))
-        return out[:32]
+                self.start(node, way, succeeded, failed)
+            return succeeded[:MAX_WAYS], failed[:MAX_WAYS]
+        kind = node.subtype.casefold()
+        children = node.children
+        if kind in _FALLBACKS:
+            remaining, succeeded = ways, []
+            for child in children:
+                ok, remaining = self.visit(child, [w.handled() for w in remaining])
+                succeeded.extend(ok)
+            return succeeded[:MAX_WAYS], remaining[:MAX_WAYS]
+        if kind == "inverter":
+            ok, failed = self.sequence(children, ways)
+            return [w.handled() for w in failed], ok
+        if kind == "succeeder":
+            ok, failed = self.sequence(children, ways)
+            return [*ok, *(w.handled() for w in failed)][:MAX_WAYS], []
+        if kind == "repeater":
+            ok, failed = self.sequence(children, ways)
+            again, failed_again = self.sequence(children, [w.fork() for w in ok])
+            return again, [*failed, *failed_again][:MAX_WAYS]
+        if kind == "repeat_until_fail":
+            ok, failed = self.sequence(children, ways)
+            _, failed_again = self.sequence(children, [w.fork() for w in ok])
+            return [w.handled() for w in (*failed, *failed_again)][:MAX_WAYS], []
+        if kind == "parallel":
+            return self.sequence(children, ways, overlap=True)
+        return self.sequence(children, ways)  # a sequence, or a control node not known
+
+    def sequence(
+        self, children: list[BtNode], ways: list[_Way], overlap: bool = False
+    ) -> tuple[list[_Way], list[_Way]]:
+        failed: list[_Way] = []
+        for child in children:
+            if overlap and child.kind == "execution":
+                ways, failures = self.visit(dataclasses.replace(child, wait=False), ways)
+            else:
+                ways, failures = self.visit(child, ways)
+            failed.extend(failures)
+        return ways, failed[:MAX_WAYS]
 
     def report(
         self, rule: str, severity: Severity, message: str, node: BtNode, way: _Way, *subjects: str
@@ -449,26 +545,22 @@ class _TreeRun:
         )
         self.findings.setdefault((rule, node.number, finding.subjects), finding)
 
-    def start(self, node: BtNode, way: _Way) -> None:
+    def start(self, node: BtNode, way: _Way, succeeded: list[_Way], failed: list[_Way]) -> None:
         task = node.task
         if task is None or task not in self.catalog.tasks or not self.catalog.performers(task):
-            return  # AX701 says so
+            succeeded.append(way)  # AX701 says so; the rest of the tree is still checked
+            return
         way.steps = (
             *way.steps,
             PathStep(node.task_mark.line, node.task_mark.column, "start", task),
         )
         attempt = self.model.start_task(way.state, task)
         if attempt.accepted is None:
+            succeeded.append(way)
             return
         if not attempt.accepted:
-            self.report(
-                TASK_REJECTED,
-                E,
-                f"{node.shown}: start_task({task}) is rejected: {attempt.reason}",
-                node,
-                way,
-                task,
-            )
+            way.rejected = (node, attempt.reason)
+            failed.append(way)
             return
         running_after = {t for t, _, _ in attempt.after}
         for stopped, starter in list(way.unwaited.items()):
@@ -488,9 +580,16 @@ class _TreeRun:
         way.state = attempt.after
         descriptor = self.catalog.tasks[task]
         ends = descriptor.execution_goal is ExecutionGoal.ACHIEVE_GOAL
-        if node.wait and ends:
-            # It ends before the next node starts (the tree waits for it).
-            way.state = frozenset(entry for entry in way.state if entry[0] != task)
-            way.unwaited.pop(task, None)
+        if node.wait:
+            # The node ends with its task: the task's goal reached (an achieve_goal
+            # task) or its behavior stopped short of it (any task: a failure).
+            stopped_way = way.fork()
+            stopped_way.state = frozenset(e for e in way.state if e[0] != task)
+            stopped_way.unwaited.pop(task, None)
+            failed.append(stopped_way)
+            if ends:
+                way.state = stopped_way.state
+                way.unwaited.pop(task, None)
         elif ends:
             way.unwaited[task] = node
+        succeeded.append(way)

@@ -48,9 +48,10 @@ Generated from the rule registry (`python -m aeroexec.verifier.docs > docs/rules
 do not edit by hand. `aeroexec verify --list-rules` lists them, `aeroexec verify --explain
 CODE` prints the same text.
 
-Codes by range: AX1xx are reported by the catalog loader and passed through by the
-verifier; AX2xx references; AX3xx capability consistency; AX4xx incompatibility; AX5xx
-start order; AX6xx behavior properties; AX7xx missions (`--mission`; AX75x the signals
+Codes by range: AX0xx suppression comments that silence nothing (ruff's RUF100); AX1xx
+are reported by the catalog loader and passed through by the verifier; AX2xx
+references; AX3xx capability consistency; AX4xx incompatibility; AX5xx start order;
+AX6xx behavior properties; AX7xx missions (`--mission`; AX75x the signals
 of their property files, `--spec`); AX8xx the Aerostack 4.x task catalogs of 2020-2021
 (AX80x from their loader, AX81x-AX82x rules, judged as the 2021 constraint-based
 coordinator, cvar-upm/coordinator_cbc, would); AX9xx the catalog against the behavior
@@ -82,19 +83,26 @@ says so).
 - **Suppression in place.** `# noqa: AX711` (or a bare `# noqa`) on the line of a mission
   finding; `# aeroexec: ignore[AX401]` (or a bare `# aeroexec: ignore`) on the line of a
   catalog finding, or alone on the line above it. In Python only real comments count
-  (not text in a string). The summary line counts what was suppressed in place.
+  (not text in a string). The summary line counts what was suppressed in place. A
+  comment that silences nothing (or names a code that is no rule) is AX001, as ruff's
+  RUF100, and `--fix` removes it.
 - **Counts.** `--statistics` prints, instead of the findings, how many each rule has
   (count, code, name; `-f json` too), most first.
 - **Fixes.** `--diff` prints the mechanical fixes as a unified diff and changes nothing
   (exit 1 when there is one); `--fix` applies them and reports what remains. A fix is
-  offered only where it is unambiguous: AX803 (a parameter key indented as a task key,
+  offered only where it is unambiguous: AX001 (an unused suppression comment, or its
+  unused codes, removed), AX803 (a parameter key indented as a task key,
   right after a `- parameter:` entry without one, is indented under it) and AX401 (a
   behavior preempted one-sidedly that has no `incompatible_lists` gets the one list
   that holds every behavior preempting it; a behavior preempting through one list it
   names but is not in joins that list, when everything it preempts names it too).
-  Fixes of the same lines wait for the next pass (at most 10, as ruff does); `--diff`
-  shows the first. A fix replaces whole lines and leaves every
-  other byte of the file as it was (line endings, a missing final newline, the file's
+  As ruff does, fixes run again on the fixed text until none is left (at most 10
+  passes): fixes of the same lines wait for the next pass, and a fix can make another
+  possible (GO_TO given the list that makes its preemption mutual leaves the
+  `aeroexec: ignore[AX304]` on its line silencing nothing, which the next pass
+  removes). The passes run in memory: `--diff` shows what all of them make, `--fix`
+  writes it. A fix replaces whole lines and leaves every other byte of the file as it
+  was (line endings, a missing final newline, the file's
   mode); the file is replaced whole or not at all.
 - **Call paths.** A mission finding inside a helper function carries the calls that
   lead to it, innermost first, as a compiler's notes: `m.py:9:5: note: in fly(), called

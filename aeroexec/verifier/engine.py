@@ -40,6 +40,8 @@ if TYPE_CHECKING:
     from aeroexec.verifier.suppress import Suppressions
 
 CatalogInput = str | Path | Catalog | TaskCatalog
+#: The code of an unused suppression comment (`aeroexec.verifier.suppress.UNUSED`).
+UNUSED_SUPPRESSION = "AX001"
 Library = Mapping[str, type[Behavior]]
 
 
@@ -311,8 +313,10 @@ class Admission:
     def __call__(self, finding: Finding) -> bool:
         if self.selection is not None and not self.selection.enabled(finding.rule, finding.file):
             return False
-        if self.comments is not None and self.comments.suppressed(
-            finding.file, finding.line, finding.rule
+        if (
+            self.comments is not None
+            and finding.rule != UNUSED_SUPPRESSION  # decided by the comments themselves
+            and self.comments.suppressed(finding.file, finding.line, finding.rule)
         ):
             self.suppressed += 1
             return False
@@ -367,6 +371,10 @@ def _verify(
             note = f" [catalog {catalog.source}]" if len(loaded) > 1 else ""
             for script in folded:
                 findings.extend(check_mission(script, catalog, note, library=library, world=world))
+    if admitted is not None and admitted.comments is not None:
+        # Last: a comment is unused only once every finding has had its chance.
+        read = (*(c.source for c in loaded), *(s.path for s in scripts), *(t.path for t in trees))
+        findings.extend(admitted.comments.unused(read))
     return Report(
         findings.findings(),
         catalogs=tuple(c.source for c in loaded),

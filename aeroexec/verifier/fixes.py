@@ -5,12 +5,21 @@ A fix is offered only where it is unambiguous:
 
 * AX803 — a parameter-only key (`allowed_values`) indented as a key of the task, right
   after a `- parameter:` entry that has none: its lines are indented under that entry;
+* AX001 — an unused suppression comment is removed (with the spaces before it; the
+  whole line when the comment was alone on it), or, when it still silences other
+  codes, only its unused codes;
 * AX401 — a behavior preempted one-sidedly that declares no `incompatible_lists` of its
   own, when exactly one behavior list holds every behavior preempting it: the behavior
   gets `incompatible_lists: [THAT_LIST]`, which makes the preemption mutual; and a
   behavior that preempts through one list it names but is not in, when every behavior
   it preempts names that list too: it joins the list (a flow list `[A, B]` gets `, C`
   before its bracket, a block list one more `- C` line).
+
+Fixes are applied in passes until none is left (at most `FIX_PASSES`), as ruff does:
+a fix can make another possible (an AX401 fix leaves the `aeroexec: ignore[AX401]` on
+its line unused, which AX001's fix then removes), and fixes of the same lines wait for
+the next pass. The passes run on the fixed contents in memory (`fix_until_stable`):
+`--diff` shows what all of them make and writes nothing, `--fix` writes the result.
 
 The text is read as bytes and decoded as UTF-8; lines are cut at `\\n` only (a `\\r\\n`
 stays in its line), and a file with other line breaks, tabs in the indentation it would
@@ -22,16 +31,17 @@ from __future__ import annotations
 
 import difflib
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 from aeroexec.catalog.formats import read_any_catalog
 from aeroexec.catalog.model import Catalog
 from aeroexec.errors import AeroexecError
-from aeroexec.verifier.findings import Finding
+from aeroexec.inputs import current_bytes, pending_contents
+from aeroexec.verifier.findings import Finding, Report
+from aeroexec.verifier.suppress import DIRECTIVE, EVERY, codes_of
 
-FIXABLE = ("AX401", "AX803")
+FIXABLE = ("AX001", "AX401", "AX803")
 
 
 @dataclass(frozen=True, slots=True)
@@ -216,6 +226,49 @@ def _one_sided_preemptor(finding: Finding, lines: Sequence[str], catalog: Catalo
     )
 
 
+def _unused_suppression(finding: Finding, lines: Sequence[str]) -> Fix | None:
+    """Remove an unused suppression comment, or only its unused codes."""
+    if not (0 < finding.line <= len(lines)):
+        return None
+    line = lines[finding.line - 1]
+    body = line.rstrip("\r\n")
+    ending = line[len(body) :]
+    start = finding.column - 1
+    found = DIRECTIVE.match(body, start) if 0 <= start < len(body) else None
+    if found is None:
+        return None  # the file changed since
+    codes = codes_of(found)
+    unused = set(finding.subjects)
+    kept = [] if codes == EVERY else [c for c in codes if c not in unused]
+    if kept:
+        group = "list" if found["list"] is not None else "bracket"
+        text = body[: found.start(group)] + ", ".join(kept) + body[found.end(group) :] + ending
+        description = f"remove {', '.join(sorted(unused))} from the suppression comment"
+        return Fix(
+            finding.file,
+            finding.rule,
+            finding.line,
+            description,
+            (Edit(finding.line, finding.line, text),),
+        )
+    before, after = body[:start], body[found.end() :]
+    if not before.strip() and not after.strip():
+        text = ""  # the comment was the line
+    elif not after.strip():
+        text = before.rstrip(" \t") + ending
+    elif not before.strip():
+        text = before + after.lstrip(" \t") + ending
+    else:
+        text = before.rstrip(" \t") + "  " + after.lstrip(" \t") + ending
+    return Fix(
+        finding.file,
+        finding.rule,
+        finding.line,
+        "remove the unused suppression comment",
+        (Edit(finding.line, finding.line, text),),
+    )
+
+
 def fixes_for(findings: Iterable[Finding]) -> list[Fix]:
     """The unambiguous fixes of these findings, at most one edit per line of a file."""
     by_file: dict[str, list[Finding]] = {}
@@ -239,6 +292,8 @@ def fixes_for(findings: Iterable[Finding]) -> list[Fix]:
             fix = (
                 _misindented_key(finding, lines)
                 if finding.rule == "AX803"
+                else _unused_suppression(finding, lines)
+                if finding.rule == "AX001"
                 else _one_sided(finding, lines, catalog)
                 if catalog is not None
                 else None
@@ -259,7 +314,7 @@ def fixes_for(findings: Iterable[Finding]) -> list[Fix]:
 
 def _read_lines(file: str) -> list[str]:
     try:
-        text = Path(file).read_bytes().decode("utf-8")
+        text = current_bytes(file).decode("utf-8")
     except (OSError, UnicodeDecodeError):
         return []
     return split_lines(text)
@@ -281,7 +336,7 @@ def fixed_files(fixes: Sequence[Fix]) -> dict[str, tuple[bytes, bytes]]:
         by_file.setdefault(fix.file, []).append(fix)
     result: dict[str, tuple[bytes, bytes]] = {}
     for file, own in by_file.items():
-        before = Path(file).read_bytes()
+        before = current_bytes(file)
         after = apply_fixes(before.decode("utf-8"), own).encode("utf-8")
         if after != before:
             result[file] = (before, after)
@@ -293,3 +348,43 @@ def unified_diff(file: str, before: bytes, after: bytes) -> str:
     new = after.decode("utf-8").splitlines(keepends=True)
     lines = difflib.unified_diff(old, new, f"a/{file}", f"b/{file}")
     return "".join(line if line.endswith("\n") else line + "\n" for line in lines)
+
+
+#: Passes of fixes at most (a pass applies the fixes that touch distinct lines).
+FIX_PASSES = 10
+
+
+@dataclass(frozen=True)
+class FixRun:
+    """What the passes of fixes made: the report on the fixed contents, and each
+    changed file's bytes before and after (nothing is written)."""
+
+    report: Report
+    before: dict[str, bytes]
+    after: dict[str, bytes]
+    applied: int
+    passes: int
+
+
+def fix_until_stable(
+    verify_again: Callable[[], Report], report: Report, passes: int = FIX_PASSES
+) -> FixRun:
+    """Apply the fixes of `report`, verify the fixed contents again (`verify_again`,
+    which reads them in memory), and so on until no fix is left or `passes` ran."""
+    contents: dict[str, bytes] = {}
+    before: dict[str, bytes] = {}
+    applied = done = 0
+    with pending_contents(contents):
+        while done < passes:
+            fixes = fixes_for(report.findings)
+            changes = fixed_files(fixes)
+            if not changes:
+                break
+            for file, (now, fixed) in changes.items():
+                before.setdefault(file, now)
+                contents[file] = fixed
+            applied += sum(1 for fix in fixes if fix.file in changes)
+            done += 1
+            report = verify_again()
+    after = {file: data for file, data in contents.items() if data != before[file]}
+    return FixRun(report, {f: before[f] for f in after}, after, applied, done)

@@ -11,11 +11,13 @@ Three kinds of entries:
   diagnostics are AX80x, from `aeroexec.catalog.task_codes`).
 * `code` — the catalog against the behavior implementations that would run it (AX9xx,
   only when the project declares its behaviors; `aeroexec.verifier.rules.code`).
+* `suppression` — suppression comments that silence nothing (AX001,
+  `aeroexec.verifier.suppress`).
 
-Codes by range: AX1xx loading, AX2xx references, AX3xx capability consistency,
-AX4xx incompatibility, AX5xx start order, AX6xx behavior properties (recurrent/timeout,
-argument specs), AX7xx missions (AX75x their property files), AX8xx task catalogs
-(2020-2021), AX9xx catalog against code.
+Codes by range: AX0xx suppression comments, AX1xx loading, AX2xx references, AX3xx
+capability consistency, AX4xx incompatibility, AX5xx start order, AX6xx behavior
+properties (recurrent/timeout, argument specs), AX7xx missions (AX75x their property
+files), AX8xx task catalogs (2020-2021), AX9xx catalog against code.
 """
 
 from __future__ import annotations
@@ -39,9 +41,10 @@ CatalogCheck = Callable[["CatalogGraphs"], Iterable[Finding]]
 CodeCheck = Callable[["CatalogGraphs", "BehaviorSet"], Iterable[Finding]]
 TaskCheck = Callable[["TaskContext"], Iterable[Finding]]
 
-KINDS = ("loader", "catalog", "mission", "property", "task", "code")
+KINDS = ("loader", "catalog", "mission", "property", "task", "code", "suppression")
 
 AREAS = {
+    "AX0": "Suppression comments",
     "AX1": "Loading (reported by the catalog loader)",
     "AX2": "References",
     "AX3": "Capability consistency",
@@ -175,6 +178,7 @@ _RULE_MODULES: dict[str, tuple[str, ...]] = {
     ),
     "property": ("aeroexec.verifier.signals",),
     "task": ("aeroexec.verifier.task_rules",),
+    "suppression": ("aeroexec.verifier.suppress",),
 }
 
 

@@ -51,7 +51,13 @@ def _dangling(
     `defined`, at its first place in the entry (a repetition is AX206's): the one loop
     every undefined-reference rule walks."""
     for definition in definitions:
-        for index, name in _first_places(getattr(definition.item, field)):
+        names = getattr(definition.item, field)
+        for name in names:
+            if name not in defined:
+                break
+        else:
+            continue  # the usual entry: every name defined, no repeats to look for
+        for index, name in _first_places(names):
             if name not in defined:
                 yield definition, index, name
 
@@ -209,11 +215,13 @@ def undefined_incompatible_capability(graphs: CatalogGraphs) -> Iterator[Finding
     witness=True,
 )
 def undefined_required_capability(graphs: CatalogGraphs) -> Iterator[Finding]:
-    users = _users_by_capability(graphs)
+    users: dict[str, tuple[str, ...]] | None = None  # built at the first dangling name
     for definition, index, name in _dangling(
         graphs.capability_defs, "required_capabilities", graphs.catalog.capabilities
     ):
         spec = definition.item
+        if users is None:
+            users = _users_by_capability(graphs)
         affected = users.get(spec.name, ()) if definition.effective else ()
         witness = None
         if affected:
@@ -265,6 +273,8 @@ def _repeats(
     names: Sequence[str],
     mark_of: MarkOf,
 ) -> Iterator[Finding]:
+    if len(names) < 2:
+        return
     repeated = _repeated(names)
     if not repeated:
         return
