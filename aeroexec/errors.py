@@ -111,3 +111,8 @@ class ReportError(AeroexecError):
 class PropertyError(AeroexecError):
     """A property file (signal temporal logic) cannot be read: bad YAML, a formula that
     does not parse, a signal no recording has."""
+
+
+class FuzzError(AeroexecError):
+    """`aeroexec fuzz` cannot use an input: its failure database, a budget, a mission to
+    mutate that runs no command."""

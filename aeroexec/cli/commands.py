@@ -71,6 +71,11 @@ COMMANDS: dict[str, CommandEntry] = {
         "(within --tolerance), the final vehicle state; and the commands only one of them "
         "has (the mission took another path).",
     ),
+    "fuzz": CommandEntry(
+        "fuzz_cmd",
+        "Generate missions for CATALOG, run them in simulation with properties on, and "
+        "shrink each violation to a short mission that shows it.",
+    ),
     "check": CommandEntry(
         "check_cmd",
         "Check recordings against properties in signal temporal logic (STL): what must "
