@@ -25,7 +25,7 @@ from aeroexec.fuzz.search import Budget
 from aeroexec.fuzz.steps import commands
 from aeroexec.progress import progress_bar
 from aeroexec.replay.executors import LOCAL
-from aeroexec.vehicles.world import FAILURE_KINDS
+from aeroexec.vehicles import world
 
 NO_FAULTS = "none"
 
@@ -37,8 +37,8 @@ def fault_kinds(given: list[str] | None) -> tuple[str, ...] | None:
     if given == [NO_FAULTS]:
         return ()
     for kind in given:
-        if kind not in FAILURE_KINDS:
-            known = ", ".join((*FAILURE_KINDS, NO_FAULTS))
+        if kind not in world.FAILURE_KINDS:
+            known = ", ".join((*world.FAILURE_KINDS, NO_FAULTS))
             raise FuzzError(f"--faults: unknown fault kind {kind!r} (known: {known})")
     return tuple(dict.fromkeys(given))
 
@@ -66,7 +66,7 @@ def fuzz(
             "--faults",
             metavar="NAME",
             help="A world fault to inject (repeatable; default: every kind the simulator "
-            f"knows: {', '.join(FAILURE_KINDS)}; {NO_FAULTS}: no faults).",
+            f"knows: {', '.join(world.FAILURE_KINDS)}; {NO_FAULTS}: no faults).",
             show_default=False,
         ),
     ] = None,

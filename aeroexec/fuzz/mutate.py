@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 from aeroexec.catalog.model import Catalog
 from aeroexec.errors import FuzzError, Mark
-from aeroexec.executive.messages import TopicRecord
+from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
 from aeroexec.fuzz.oracle import MAX_SIM_TIME_S, Bench
 from aeroexec.fuzz.steps import ACTIVATE, EXECUTE, INHIBIT, Command, Mission
 from aeroexec.fuzz.strategies import Vocabulary, arguments, fault
@@ -42,6 +42,9 @@ class _Commands:
     def __init__(self, catalog: Catalog) -> None:
         self.catalog = catalog
         self.steps: list[Command] = []
+
+    def on_service_call(self, record: ServiceCallRecord) -> None:
+        return None
 
     def on_topic(self, record: TopicRecord) -> None:
         if record.topic != "mission/command":

@@ -195,7 +195,6 @@ def write_findings(
         "fault_kinds": list(bench.target.fault_kinds)
         if bench.target.fault_kinds is not None
         else None,
-        "database": {"still_failing": report.replayed, "fixed": report.fixed},
         "findings": [
             {
                 "property": w.finding.name,

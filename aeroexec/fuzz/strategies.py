@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from aeroexec.catalog.model import ArgumentKind, ArgumentSpec, BehaviorDescriptor, Catalog
 from aeroexec.fuzz.steps import ACTIVATE, EXECUTE, INHIBIT, Command, Fault, Mission
-from aeroexec.vehicles.world import FAILURE_KINDS
+from aeroexec.vehicles import world
 
 #: The generated part of a mission has at most this many steps (the ending adds its own).
 MAX_STEPS = 12
@@ -40,7 +40,8 @@ class Vocabulary:
 def vocabulary(catalog: Catalog, fault_kinds: tuple[str, ...] | None = None) -> Vocabulary:
     names = tuple(catalog.behaviors)
     executable = tuple(n for n in names if not catalog.behaviors[n].recurrent)
-    kinds = FAILURE_KINDS if fault_kinds is None else fault_kinds
+    # Read at each call: a kind the simulator gains is fuzzed without a change here.
+    kinds = world.FAILURE_KINDS if fault_kinds is None else fault_kinds
     return Vocabulary(names, executable, tuple(kinds))
 
 
