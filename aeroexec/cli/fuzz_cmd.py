@@ -154,7 +154,7 @@ def print_result(result: CampaignResult, output_dir: Path, quiet: bool) -> None:
             again = "" if written.reproduced else " (NOT reproduced from its files)"
             typer.echo(
                 f"{output_dir / written.folder.name / 'mission.py'}: {finding.name}: "
-                f"{finding.message} [{count} commands]{again}"
+                f"{finding.message} [{count} command{'' if count == 1 else 's'}]{again}"
             )
     replayed = f", {len(report.replayed)} from the database" if report.replayed else ""
     fixed = f", {report.fixed} past failures pass now" if report.fixed else ""

@@ -128,9 +128,15 @@ def call(command: Command) -> str:
     )
     parts = [repr(command.behavior)]
     odd: list[str] = []
+    used: set[str] = set()
     for name, value in command.arguments:
         keyword_name = name.lower()
-        if keyword_name.isidentifier() and not keyword.iskeyword(keyword_name):
+        if (
+            keyword_name.isidentifier()
+            and not keyword.iskeyword(keyword_name)
+            and keyword_name not in used
+        ):
+            used.add(keyword_name)
             parts.append(f"{keyword_name}={_value(value)}")
         else:
             odd.append(f"{name!r}: {_value(value)}")
@@ -155,8 +161,8 @@ def mission_text(mission: Sequence[Step], ending: Ending, header: Sequence[str] 
     if ending_calls:
         body.append("    # the ending every mission has: inhibit what it activated, then land")
         body += [f"    {call(c)}" for c in ending_calls]
-    if not body:
-        body = ["    pass"]
+    if not commands(mission) and not ending_calls:
+        body.append("    pass")
     return "\n".join(lines + body) + "\n"
 
 
