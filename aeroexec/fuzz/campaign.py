@@ -21,6 +21,7 @@ from aeroexec.fuzz.output import (
     Written,
     folder_name,
     read_database,
+    remove_stale,
     write_counterexample,
     write_database,
     write_findings,
@@ -91,6 +92,7 @@ def run_campaign(campaign: Campaign, progress: ProgressFactory | None = None) ->
     )
     write_findings(out, bench, report, written, seed=campaign.seed, budget=campaign.budget_text)
     write_database(out, target.catalog, report.findings)
+    remove_stale(out, written)
     return CampaignResult(report, written)
 
 

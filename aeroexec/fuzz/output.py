@@ -177,6 +177,29 @@ def write_counterexample(bench: Bench, folder: Path, finding: Finding, fuzz_seed
     return Written(finding, folder, reproduced, ran, checked)
 
 
+#: What a counterexample's folder holds (a folder with anything else is not removed).
+FOLDER_FILES = frozenset({MISSION, WORLD, RECORDING, VIOLATION})
+
+
+def remove_stale(directory: Path, written: Sequence[Written]) -> list[str]:
+    """Remove the counterexample folders an earlier run left that this one did not write
+    (a property that holds now), so DIR shows this run's findings only; a folder holding
+    anything aeroexec fuzz did not write is left alone. Returns what was removed."""
+    keep = {w.folder.name for w in written}
+    removed = []
+    for folder in sorted(directory.iterdir()):
+        name = folder.name
+        if not (folder.is_dir() and name[:2].isdigit() and name[2:3] == "-") or name in keep:
+            continue
+        files = list(folder.iterdir())
+        if all(f.is_file() and f.name in FOLDER_FILES for f in files):
+            for f in files:
+                f.unlink()
+            folder.rmdir()
+            removed.append(name)
+    return removed
+
+
 def write_findings(
     directory: Path,
     bench: Bench,
