@@ -3,6 +3,7 @@ breaks and write each counterexample."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -41,6 +42,12 @@ def fault_kinds(given: list[str] | None) -> tuple[str, ...] | None:
             known = ", ".join((*world.FAILURE_KINDS, NO_FAULTS))
             raise FuzzError(f"--faults: unknown fault kind {kind!r} (known: {known})")
     return tuple(dict.fromkeys(given))
+
+
+def _progress(description: str, total: int):  # type: ignore[no-untyped-def]
+    """A bar on a terminal's stderr, however small the budget: a search takes seconds
+    to minutes whatever its count."""
+    return progress_bar(description, total, enabled=sys.stderr.isatty())
 
 
 @app.command("fuzz")
@@ -139,7 +146,7 @@ def fuzz(
         executor=executor,
         budget_text=budget,
     )
-    result = run_campaign(campaign, progress=None if quiet else progress_bar)
+    result = run_campaign(campaign, progress=None if quiet else _progress)
     print_result(result, output_dir, quiet)
     if result.report.findings:
         raise typer.Exit(1)

@@ -10,6 +10,7 @@ started before any progress bar's thread (forking a threaded process is unsafe).
 from __future__ import annotations
 
 import contextlib
+import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -72,9 +73,16 @@ def run_campaign(campaign: Campaign, progress: ProgressFactory | None = None) ->
 
         total = budget.runs if budget.runs is not None else round(budget.seconds or 0)
         with _bar(progress, total) as advance:
+            started, shown = [time.monotonic()], [0]
 
             def on_chunk(result: ChunkResult) -> None:
-                advance(min(result.runs, CHUNK_RUNS) if budget.runs is not None else 0)
+                if budget.runs is not None:
+                    advance(min(result.runs, CHUNK_RUNS))
+                    return
+                # A time budget's bar counts its seconds (the last chunk may overrun it).
+                seconds = min(round(time.monotonic() - started[0]), total - shown[0])
+                advance(seconds)
+                shown[0] += seconds
 
             report = fuzz(
                 target,
