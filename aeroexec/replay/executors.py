@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from types import TracebackType
-from typing import Protocol
+from typing import Any, Protocol
 
 from aeroexec import interrupts
 from aeroexec.errors import AeroexecError
@@ -46,11 +46,10 @@ from aeroexec.progress import ProgressFactory
 from aeroexec.replay.engine import ReplayOptions, ReplayResult
 from aeroexec.replay.tasks import (
     Completed,
-    ReplayTask,
+    Task,
     batch_size,
     make_tasks,
     run_batch,
-    run_task,
 )
 
 #: Batches queued per worker: enough that no worker waits for the next, few enough that
@@ -66,7 +65,8 @@ _PR_SET_PDEATHSIG = 1
 
 
 class Executor(Protocol):
-    """Runs replay tasks somewhere; a context manager that starts and stops its workers."""
+    """Runs tasks (replays, fuzz chunks) somewhere; a context manager that starts and
+    stops its workers."""
 
     #: What the report and errors call it: "local", "ray", "ray://head:10001".
     name: str
@@ -82,7 +82,7 @@ class Executor(Protocol):
         tb: TracebackType | None,
     ) -> None: ...
 
-    def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
+    def run(self, tasks: Sequence[Task]) -> Iterator[Completed]:
         """Each task's result as soon as it is there (order: whichever finishes first)."""
         ...
 
@@ -111,9 +111,9 @@ class InlineExecutor:
     def __exit__(self, *exc_info: object) -> None:
         return None
 
-    def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
+    def run(self, tasks: Sequence[Task]) -> Iterator[Completed]:
         for task in tasks:
-            yield Completed(task.index, run_task(task, self.progress))
+            yield Completed(task.index, task.run(self.progress))
 
 
 def _start_method() -> multiprocessing.context.BaseContext:
@@ -201,14 +201,14 @@ class ProcessExecutor:
             return
         pool.shutdown(wait=True, cancel_futures=True)
 
-    def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
+    def run(self, tasks: Sequence[Task]) -> Iterator[Completed]:
         pool = self._pool
         if pool is None:
             raise RuntimeError("ProcessExecutor.run outside its `with` block")
         size = batch_size(len(tasks), self.workers)
         waiting = iter([list(tasks[i : i + size]) for i in range(0, len(tasks), size)])
-        running: dict[Future[list[ReplayResult]], list[ReplayTask]] = {}
-        unfinished: list[ReplayTask] = []
+        running: dict[Future[list[Any]], list[Task]] = {}
+        unfinished: list[Task] = []
         broken: str | None = None
 
         def submit() -> None:
@@ -239,19 +239,19 @@ class ProcessExecutor:
                     results = future.result()
                 except BrokenProcessPool as exc:
                     broken = broken or str(exc) or "a worker process died"
-                    results = [_lost(task, broken) for task in batch]
+                    results = [task.lost(broken) for task in batch]
                 for task, result in zip(batch, results, strict=True):
                     yield Completed(task.index, result)
                 submit()
         for batch in waiting:
             unfinished.extend(batch)
         for task in unfinished:
-            yield Completed(task.index, _lost(task, broken or "the process pool stopped"))
+            yield Completed(task.index, task.lost(broken or "the process pool stopped"))
 
     @staticmethod
     def _stop_workers(
         pool: ProcessPoolExecutor,
-        running: dict[Future[list[ReplayResult]], list[ReplayTask]],
+        running: dict[Future[list[Any]], list[Task]],
         stop: interrupts.Interrupted,
     ) -> None:
         """Pass the driver's signal on to the workers and give them a moment to stop at
@@ -267,15 +267,6 @@ class ProcessExecutor:
                 error = future.exception()
                 if isinstance(error, interrupts.Interrupted):
                     stop.notes.extend(error.notes)
-
-
-def _lost(task: ReplayTask, why: str) -> ReplayResult:
-    return ReplayResult(
-        recording=task.recording,
-        mode=task.options.mode.value if task.options.mode is not None else None,
-        error=f"not replayed: {why} (killed, or out of memory?); --jobs 1 or --executor ray "
-        "(which retries) tells which recording",
-    )
 
 
 def executor_for(spec: str, jobs: int = 1, tasks: int | None = None) -> Executor:

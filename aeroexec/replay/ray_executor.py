@@ -40,14 +40,7 @@ import aeroexec
 from aeroexec.errors import AeroexecError
 from aeroexec.interrupts import check
 from aeroexec.replay import ray_client_check
-from aeroexec.replay.engine import ReplayResult
-from aeroexec.replay.tasks import (
-    Completed,
-    ReplayTask,
-    batch_size,
-    run_batch,
-    with_retry_note,
-)
+from aeroexec.replay.tasks import Completed, Task, batch_size, run_batch
 
 #: Ray's default for tasks, said out loud: how often a task whose worker died is rerun.
 MAX_RETRIES = 3
@@ -69,8 +62,9 @@ def _attempt() -> int:
         return 0
 
 
-def replay_on_worker(batch: list[ReplayTask]) -> tuple[list[ReplayResult], int]:
-    """The Ray task: a few recordings' results and the attempt that produced them."""
+def replay_on_worker(batch: list[Task]) -> tuple[list[Any], int]:
+    """The Ray task: a few tasks' results (recordings', fuzz chunks') and the attempt
+    that produced them."""
     return run_batch(batch), _attempt()
 
 
@@ -156,13 +150,13 @@ class RayExecutor:
                 f"{aeroexec.__version__}: replays would not test this version"
             )
 
-    def run(self, tasks: Sequence[ReplayTask]) -> Iterator[Completed]:
+    def run(self, tasks: Sequence[Task]) -> Iterator[Completed]:
         if self._remote is None:
             raise RuntimeError("RayExecutor.run outside its `with` block")
         cpus = self._cpus()
         size = batch_size(len(tasks), cpus)
         waiting = deque(list(tasks[i : i + size]) for i in range(0, len(tasks), size))
-        running: dict[Any, list[ReplayTask]] = {}
+        running: dict[Any, list[Task]] = {}
         #: Attempts that died before, per task index (its batch's, before it ran alone).
         spent: dict[int, int] = {}
 
@@ -192,8 +186,8 @@ class RayExecutor:
     def _completed(
         self,
         ref: Any,
-        batch: list[ReplayTask],
-        waiting: deque[list[ReplayTask]],
+        batch: list[Task],
+        waiting: deque[list[Task]],
         spent: dict[int, int],
     ) -> Iterator[Completed]:
         """The results of a finished Ray task; a batch whose worker died on every attempt
@@ -203,9 +197,7 @@ class RayExecutor:
             results, attempt = ray.get(ref)
         except ray.exceptions.RayTaskError as exc:  # not a recording's doing: a bug, or
             for task in batch:  # a cluster that cannot unpickle the task
-                yield Completed(
-                    task.index, _error(task, f"the Ray task failed: {_first_line(exc)}")
-                )
+                yield Completed(task.index, task.failed(f"the Ray task failed: {_first_line(exc)}"))
             return
         except ray.exceptions.RayError as exc:  # its worker died on every attempt
             for task in batch:
@@ -216,24 +208,18 @@ class RayExecutor:
             (task,) = batch
             yield Completed(
                 task.index,
-                _error(
-                    task,
+                task.failed(
                     f"not replayed: the Ray worker failed on each of {spent[task.index]} "
-                    f"attempts ({type(exc).__name__})",
+                    f"attempts ({type(exc).__name__})"
                 ),
             )
             return
         for task, result in zip(batch, results, strict=True):
             runs = spent.get(task.index, 0) + attempt + 1
-            yield Completed(task.index, with_retry_note(result, runs) if runs > 1 else result)
+            yield Completed(task.index, task.retried(result, runs) if runs > 1 else result)
 
     def _cpus(self) -> int:
         return max(1, int(ray.cluster_resources().get("CPU", 1)))
-
-
-def _error(task: ReplayTask, text: str) -> ReplayResult:
-    mode = task.options.mode.value if task.options.mode is not None else None
-    return ReplayResult(recording=task.recording, error=text, mode=mode)
 
 
 def _first_line(exc: BaseException) -> str:

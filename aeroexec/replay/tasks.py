@@ -1,5 +1,9 @@
 """One recording to replay, as handed to a worker, and what a worker does with it.
 
+The executors (executors.py, ray_executor.py) run any `Task`: an index, `run()`, and the
+result that stands for a task they could not run. `ReplayTask` is replay's; `aeroexec
+fuzz` hands them its search chunks the same way (aeroexec/fuzz/search.py).
+
 A `ReplayTask` is small and picklable (names and options, never the recording's bytes),
 so every executor — this process, a process pool, a Ray cluster — ships the same thing
 and runs the same `run_task`. `run_task` never raises for a recording: whatever goes
@@ -18,6 +22,7 @@ import traceback
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any, Protocol
 
 from aeroexec.errors import AeroexecError
 from aeroexec.progress import ProgressFactory
@@ -44,6 +49,30 @@ COLLECT_EVERY = 16
 _replays = itertools.count(1)
 
 
+class Task(Protocol):
+    """What an executor runs: small and picklable, so it can go to another process or a
+    Ray worker; `run` never raises for a problem of its own input (that is its result)."""
+
+    @property
+    def index(self) -> int: ...
+
+    def run(self, progress: ProgressFactory | None = None) -> Any:
+        """Do the work here (`progress`: how far one long task is, when run inline)."""
+        ...
+
+    def lost(self, why: str) -> Any:
+        """The result of a task whose worker was lost (`why`: how)."""
+        ...
+
+    def failed(self, text: str) -> Any:
+        """The result of a task that could not run, said in `text`."""
+        ...
+
+    def retried(self, result: Any, attempt: int) -> Any:
+        """`result`, noting it took `attempt` runs (its worker died on the others)."""
+        ...
+
+
 @dataclass(frozen=True, slots=True)
 class ReplayTask:
     """Replay `recording` (the name the report shows, as the user gave it), read from
@@ -54,13 +83,29 @@ class ReplayTask:
     location: str
     options: ReplayOptions
 
+    def run(self, progress: ProgressFactory | None = None) -> ReplayResult:
+        return run_task(self, progress)
+
+    def lost(self, why: str) -> ReplayResult:
+        return _failed(
+            self,
+            f"not replayed: {why} (killed, or out of memory?); --jobs 1 or --executor ray "
+            "(which retries) tells which recording",
+        )
+
+    def failed(self, text: str) -> ReplayResult:
+        return _failed(self, text)
+
+    def retried(self, result: ReplayResult, attempt: int) -> ReplayResult:
+        return with_retry_note(result, attempt)
+
 
 @dataclass(frozen=True, slots=True)
 class Completed:
     """A finished task: its position in the batch and its result."""
 
     index: int
-    result: ReplayResult
+    result: Any
 
 
 def make_tasks(
@@ -144,9 +189,9 @@ def batch_size(tasks: int, workers: int) -> int:
     return max(1, min(MAX_BATCH, tasks // (workers * BATCHES_PER_WORKER)))
 
 
-def run_batch(batch: list[ReplayTask]) -> list[ReplayResult]:
-    """A worker's share: a few recordings, one after the other."""
-    return [run_task(task) for task in batch]
+def run_batch(batch: Sequence[Task]) -> list[Any]:
+    """A worker's share: a few tasks, one after the other."""
+    return [task.run() for task in batch]
 
 
 def _failed(task: ReplayTask, error: str) -> ReplayResult:
