@@ -117,6 +117,8 @@ class InjectionError(AeroexecError):
     """A fault to inject (`replay --inject FAULT@WHEN`, `explore --faults`) is not one the
     simulator models, a parameter is unknown or out of range, or WHEN names no moment of
     the recording."""
+
+
 class FuzzError(AeroexecError):
     """`aeroexec fuzz` cannot use an input: its failure database, a budget, a mission to
     mutate that runs no command."""

@@ -77,6 +77,7 @@ COMMANDS: dict[str, CommandEntry] = {
         "(each activation, each end, each capability referenced or released, plus "
         "--offsets) and report, per transition and fault, whether the system held, the "
         "mission failed cleanly, or a property was violated (aeroexec:safety and --spec).",
+    ),
     "fuzz": CommandEntry(
         "fuzz_cmd",
         "Generate missions for CATALOG, run them in simulation with properties on, and "

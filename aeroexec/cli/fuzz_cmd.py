@@ -33,6 +33,8 @@ NO_FAULTS = "none"
 
 def fault_kinds(given: list[str] | None) -> tuple[str, ...] | None:
     """--faults: None (every kind) when not given; `none` alone: no faults."""
+    # Comma-separated as `explore --faults` takes them, and repeatable.
+    given = [kind.strip() for text in given or () for kind in text.split(",") if kind.strip()]
     if not given:
         return None
     if given == [NO_FAULTS]:
@@ -71,9 +73,10 @@ def fuzz(
         list[str] | None,
         typer.Option(
             "--faults",
-            metavar="NAME",
-            help="A world fault to inject (repeatable; default: every kind the simulator "
-            f"knows: {', '.join(world.FAILURE_KINDS)}; {NO_FAULTS}: no faults).",
+            metavar="KINDS",
+            help="World fault kinds to inject, comma-separated (repeatable; default: every "
+            f"kind the simulator knows: {', '.join(world.FAILURE_KINDS)}; {NO_FAULTS}: no "
+            "faults).",
             show_default=False,
         ),
     ] = None,
