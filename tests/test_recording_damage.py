@@ -199,7 +199,11 @@ def is_subsequence(part: list[object], whole: list[object]) -> bool:
 
 
 @settings(
-    max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=80,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+    derandomize=True,
+    database=None,
 )
 @given(data=st.data())
 def test_damage_anywhere_is_reported_never_invented(
