@@ -77,7 +77,10 @@ TASK_INTERRUPTED = mission_rule(
     with it: the coordinator stops the first task at once. In
     flight: the first task hardly runs (a TAKE_OFF stopped by the next motion task
     leaves the vehicle on the ground). Fix: set `wait_for_completion: true` on the first
-    node; tasks that must overlap cannot be mutually exclusive.""",
+    node; tasks that must overlap cannot be mutually exclusive. The mission is read as
+    written: Aerostack's 2021 interpreter parses `wait_for_completion` but waits for
+    every task anyway, so a flight on it does not show the stop; the warning says the
+    mission depends on that, and that its words ask for the stop.""",
 ).code
 TASK_REJECTED = mission_rule(
     "AX717",
