@@ -28,6 +28,7 @@ import time
 import tty
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -769,18 +770,55 @@ def topics_with_times(record: Path, name: str) -> list[tuple[int, Any]]:
 
 # -- what if: a fault struck on the real autopilot (issue 26) ----------------------------------
 
-#: Out 30 m, back, land: the battery fails on the way out, long before the leg's end.
+#: Out 60 m, back, land: the fault strikes on the way out, long before the leg's end.
 OUT_AND_BACK = (
     "    results = [api.executeBehavior('TAKE_OFF')]\n"
-    "    results.append(api.executeBehavior('GO_TO_POINT', coordinates=[0, 30, 2]))\n"
+    f"    results.append(api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG}))\n"
     "    results.append(api.executeBehavior('GO_TO_POINT', coordinates=[0, 0, 2]))\n"
     "    results.append(api.executeBehavior('LAND'))\n"
     "    return results\n"
 )
-#: ArduCopter's battery failsafe: LAND when the voltage stays below 10.5 V for 2 s.
-BATTERY_FAILSAFE = {"BATT_FS_LOW_ACT": 1.0, "BATT_LOW_VOLT": 10.5, "BATT_LOW_TIMER": 2.0}
-#: SITL's battery: 12.6 V full; what the injection drops it to.
-DROPPED_VOLTAGE = 10.0
+
+
+@dataclass(frozen=True)
+class AutopilotFault:
+    """A fault of the simulator's registry and its counterpart on ArduCopter SITL."""
+
+    #: What explore strikes in the simulator (at end:TAKE_OFF).
+    simulated: str
+    #: SITL's failsafe settings, at start.
+    params: dict[str, float]
+    #: The simulation parameter set at the moment, and its value.
+    parameter: tuple[str, float]
+    #: The autopilot's STATUSTEXT that says its failsafe took over.
+    failsafe: str
+    #: The vehicle fault the simulator reports, and why it refuses the next leg.
+    reports: str
+    refusal: str
+
+
+AUTOPILOT_FAULTS = {
+    # ArduCopter's battery failsafe: LAND when the voltage stays below 10.5 V for 2 s;
+    # SITL's battery is 12.6 V full. The simulator's empty battery forces a landing.
+    "empty battery": AutopilotFault(
+        "low_battery:level=0",
+        {"BATT_FS_LOW_ACT": 1.0, "BATT_LOW_VOLT": 10.5, "BATT_LOW_TIMER": 2.0},
+        ("SIM_BATT_VOLTAGE", 10.0),
+        "Battery Failsafe",
+        "battery_empty",
+        "the battery is empty (landing)",
+    ),
+    # The GPS gone: ArduCopter's EKF failsafe (FS_EKF_ACTION's default, LAND) once its
+    # variances grow. The simulator's lost position lands where it is.
+    "lost position": AutopilotFault(
+        "lost_position",
+        {},
+        ("SIM_GPS_DISABLE", 1.0),
+        "EKF Failsafe: changed to LAND Mode",
+        "position_lost",
+        "no position estimate",
+    ),
+}
 
 
 def behavior_events(record: Path) -> list[tuple[str, str, str]]:
@@ -789,30 +827,29 @@ def behavior_events(record: Path) -> list[tuple[str, str, str]]:
     return [(e["name"], e["code"], e["detail"]) for e in topics.get("behavior_event", [])]
 
 
-def test_an_empty_battery_in_the_simulator_is_the_autopilots_battery_failsafe(
-    tmp_path: Path, flight: Any
+@pytest.mark.parametrize("fault", AUTOPILOT_FAULTS.values(), ids=AUTOPILOT_FAULTS.keys())
+def test_a_fault_struck_on_the_autopilot_makes_the_executive_decide_as_in_the_simulator(
+    tmp_path: Path, flight: Any, fault: AutopilotFault
 ) -> None:
-    """The counterexample explore would strike, `low_battery:level=0@end:TAKE_OFF` (the
-    simulator's empty battery: a forced landing), struck on the real autopilot through
-    its simulation parameters: SITL's battery voltage dropped below BATT_LOW_VOLT when
-    fly prints TAKE_OFF's end, ArduCopter's battery failsafe (LAND) takes over. The
-    executive decides the same in both: the same behaviors end with the same codes in
-    the same order. What differs is the cause it is told, explained in docs/whatif.md
-    ("On the real autopilot"): the simulator reports the battery empty, over MAVLink the
-    executive sees only that the autopilot left GUIDED for LAND (`mode_changed:LAND`),
-    since SYS_STATUS's charge comes from the mAh used, not from the voltage."""
+    """The counterexample explore would strike at end:TAKE_OFF, struck on the real
+    autopilot through its own simulation parameters when fly prints TAKE_OFF's end:
+    ArduCopter's failsafe (LAND) takes over. The executive decides the same in both: the
+    same behaviors end with the same codes in the same order. What differs is the cause
+    it is told, explained in docs/whatif.md ("On the real autopilot"): the simulator
+    reports its fault, over MAVLink the executive sees only that the autopilot left
+    GUIDED for LAND (`mode_changed:LAND`)."""
     record = tmp_path / "flight.mcap"
     mission = write_mission(tmp_path, OUT_AND_BACK)
-    sitl = flight(Sitl, tmp_path, params={**SLOW, **BATTERY_FAILSAFE})
+    sitl = flight(Sitl, tmp_path, params={**SLOW, **fault.params})
     fly = flight(Fly, fly_args(mission, f"tcp:127.0.0.1:{sitl.tcp_port}", record))
     fly.wait_for("start    TAKE_OFF")
     monitor = flight(Monitor, sitl)  # connected before the moment, to strike without delay
     fly.wait_for("end      TAKE_OFF GOAL_ACHIEVED")
-    monitor.set_parameter("SIM_BATT_VOLTAGE", DROPPED_VOLTAGE)
+    monitor.set_parameter(*fault.parameter)
     code, out, err = fly.finish()
 
     assert code == 1, out + err  # the mission's goals failed; the vehicle is down
-    assert "autopilot: Battery Failsafe" in out
+    assert f"autopilot: {fault.failsafe}" in out
     assert "ending: vehicle on the ground at (" in out and "in LAND, disarmed" in out
     assert monitor.down(timeout=30) and monitor.mode == LAND_MODE
     # The autopilot's own failsafe struck during the first leg, as the fault does in the
@@ -821,7 +858,7 @@ def test_an_empty_battery_in_the_simulator_is_the_autopilots_battery_failsafe(
     failsafe = [
         t
         for t, r in topics_with_times(record, "mavlink/rx")
-        if r["type"] == "STATUSTEXT" and r["fields"]["text"] == "Battery Failsafe"
+        if r["type"] == "STATUSTEXT" and r["fields"]["text"] == fault.failsafe
     ]
     assert len(failsafe) == 1 and ends[0] < failsafe[0] <= ends[1], (ends, failsafe)
     flown = behavior_events(record)
@@ -834,7 +871,7 @@ def test_an_empty_battery_in_the_simulator_is_the_autopilots_battery_failsafe(
     )
     assert made.error is None, made.error
     struck = tmp_path / "struck.mcap"
-    injection = parse_injection("low_battery:level=0@end:TAKE_OFF")
+    injection = parse_injection(f"{fault.simulated}@end:TAKE_OFF")
     options = ReplayOptions(
         mode=Mode.closed, mission=str(mission), output=str(struck), injections=(injection,)
     )
@@ -854,9 +891,9 @@ def test_an_empty_battery_in_the_simulator_is_the_autopilots_battery_failsafe(
     assert [(name, code) for name, code, _ in simulated] == decided, simulated
     # The explained difference: the cause each failure names, and nothing else.
     assert [detail for _, _, detail in simulated[1:3]] == [
-        "vehicle fault: battery_empty",
-        "on_start failed: VehicleCommandError: go_to: refused, the battery is empty "
-        "(landing); vehicle fault: battery_empty",
+        f"vehicle fault: {fault.reports}",
+        f"on_start failed: VehicleCommandError: go_to: refused, {fault.refusal}; "
+        f"vehicle fault: {fault.reports}",
     ]
     assert [detail for _, _, detail in flown[1:3]] == [
         "vehicle fault: mode_changed:LAND",
