@@ -904,6 +904,14 @@ def test_a_fault_struck_on_the_autopilot_makes_the_executive_decide_as_in_the_si
     # (SYS_STATUS battery_remaining) is computed from the mAh used, not the voltage.
     charges = [s["battery"] for _, s in topics_with_times(record, "vehicle/state")]
     assert min(charges) > 0.9, min(charges)
+    # Nor that the position is lost: LOCAL_POSITION_NED goes on after the failsafe (the
+    # EKF's dead reckoning without GPS), so the position belief stays.
+    positions = [
+        t
+        for t, r in topics_with_times(record, "mavlink/rx")
+        if r["type"] == "LOCAL_POSITION_NED" and t > failsafe[0]
+    ]
+    assert len(positions) > 10, len(positions)
     # The same properties hold on both.
     safety = load_properties(["aeroexec:safety"])
     verdicts = [
