@@ -28,6 +28,7 @@ import time
 import tty
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +43,7 @@ from aeroexec.properties.spec import load_properties
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
 from aeroexec.replay.engine import Mode, ReplayOptions, replay_recording
+from aeroexec.replay.inject import parse_injection
 
 #: How far from the position at a SIGTERM at ~7.5 m/s the vehicle may touch down: what
 #: ArduCopter needs to stop (measured on SITL: ~15 m in BRAKE), with a margin. See the
@@ -207,6 +209,20 @@ class Monitor:
         """A COMMAND_LONG to the autopilot, as a second ground station would send it."""
         p = (*params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)[:7]
         self.conn.mav.command_long_send(1, 1, command, 0, *p)
+
+    def set_parameter(self, name: str, value: float, timeout: float = 10.0) -> None:
+        """PARAM_SET, as a second ground station would send it; returns once the
+        autopilot's PARAM_VALUE echoes the new value."""
+        from pymavlink import mavutil
+
+        float_type = mavutil.mavlink.MAV_PARAM_TYPE_REAL32
+        self.conn.mav.param_set_send(1, 1, name.encode("ascii"), value, float_type)
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            msg = self.conn.recv_match(type="PARAM_VALUE", blocking=True, timeout=0.5)
+            if msg is not None and msg.param_id == name and math.isclose(msg.param_value, value):
+                return
+        raise AssertionError(f"the autopilot did not confirm {name} = {value:g}")
 
     def land_now(self, timeout: float = 90.0) -> bool:
         """Switch to LAND (MAV_CMD_DO_SET_MODE) and wait until landed and disarmed."""
@@ -771,3 +787,156 @@ def topics_with_times(record: Path, name: str) -> list[tuple[int, Any]]:
         for item in open_recording(record).records()
         if isinstance(item, RecordedTopic) and item.name == name
     ]
+
+
+# -- what if: a fault struck on the real autopilot (issue 26) ----------------------------------
+
+#: Out 60 m, back, land: the fault strikes on the way out, long before the leg's end.
+OUT_AND_BACK = (
+    "    results = [api.executeBehavior('TAKE_OFF')]\n"
+    f"    results.append(api.executeBehavior('GO_TO_POINT', coordinates={FAR_LEG}))\n"
+    "    results.append(api.executeBehavior('GO_TO_POINT', coordinates=[0, 0, 2]))\n"
+    "    results.append(api.executeBehavior('LAND'))\n"
+    "    return results\n"
+)
+
+
+@dataclass(frozen=True)
+class AutopilotFault:
+    """A fault of the simulator's registry and its counterpart on ArduCopter SITL."""
+
+    #: What explore strikes in the simulator (at end:TAKE_OFF).
+    simulated: str
+    #: SITL's failsafe settings, at start.
+    params: dict[str, float]
+    #: The simulation parameter set at the moment, and its value.
+    parameter: tuple[str, float]
+    #: The autopilot's STATUSTEXT that says its failsafe took over.
+    failsafe: str
+    #: The vehicle fault the simulator reports, and why it refuses the next leg.
+    reports: str
+    refusal: str
+
+
+AUTOPILOT_FAULTS = {
+    # ArduCopter's battery failsafe: LAND when the voltage stays below 10.5 V for 2 s;
+    # SITL's battery is 12.6 V full. The simulator's empty battery forces a landing.
+    "empty battery": AutopilotFault(
+        "low_battery:level=0",
+        {"BATT_FS_LOW_ACT": 1.0, "BATT_LOW_VOLT": 10.5, "BATT_LOW_TIMER": 2.0},
+        ("SIM_BATT_VOLTAGE", 10.0),
+        "Battery Failsafe",
+        "battery_empty",
+        "the battery is empty (landing)",
+    ),
+    # The GPS gone: ArduCopter's EKF failsafe (FS_EKF_ACTION's default, LAND) once its
+    # variances grow. The simulator's lost position lands where it is.
+    "lost position": AutopilotFault(
+        "lost_position",
+        {},
+        ("SIM_GPS_DISABLE", 1.0),
+        "EKF Failsafe: changed to LAND Mode",
+        "position_lost",
+        "no position estimate",
+    ),
+}
+
+
+def behavior_events(record: Path) -> list[tuple[str, str, str]]:
+    """(name, code, detail) of every behavior event, in order."""
+    _, topics = recorded(record)
+    return [(e["name"], e["code"], e["detail"]) for e in topics.get("behavior_event", [])]
+
+
+@pytest.mark.parametrize("fault", AUTOPILOT_FAULTS.values(), ids=AUTOPILOT_FAULTS.keys())
+def test_a_fault_struck_on_the_autopilot_makes_the_executive_decide_as_in_the_simulator(
+    tmp_path: Path, flight: Any, fault: AutopilotFault
+) -> None:
+    """The counterexample explore would strike at end:TAKE_OFF, struck on the real
+    autopilot through its own simulation parameters when fly prints TAKE_OFF's end:
+    ArduCopter's failsafe (LAND) takes over. The executive decides the same in both: the
+    same behaviors end with the same codes in the same order. What differs is the cause
+    it is told, explained in docs/whatif.md ("On the real autopilot"): the simulator
+    reports its fault, over MAVLink the executive sees only that the autopilot left
+    GUIDED for LAND (`mode_changed:LAND`)."""
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, OUT_AND_BACK)
+    sitl = flight(Sitl, tmp_path, params={**SLOW, **fault.params})
+    fly = flight(Fly, fly_args(mission, f"tcp:127.0.0.1:{sitl.tcp_port}", record))
+    fly.wait_for("start    TAKE_OFF")
+    monitor = flight(Monitor, sitl)  # connected before the moment, to strike without delay
+    fly.wait_for("end      TAKE_OFF GOAL_ACHIEVED")
+    monitor.set_parameter(*fault.parameter)
+    code, out, err = fly.finish()
+
+    assert code == 1, out + err  # the mission's goals failed; the vehicle is down
+    assert f"autopilot: {fault.failsafe}" in out
+    assert "ending: vehicle on the ground at (" in out and "in LAND, disarmed" in out
+    assert monitor.down(timeout=30) and monitor.mode == LAND_MODE
+    # The autopilot's own failsafe struck during the first leg, as the fault does in the
+    # simulator: after TAKE_OFF ended, before the leg ended.
+    ends = [t for t, _ in topics_with_times(record, "behavior_event")]
+    failsafe = [
+        t
+        for t, r in topics_with_times(record, "mavlink/rx")
+        if r["type"] == "STATUSTEXT" and r["fields"]["text"] == fault.failsafe
+    ]
+    assert len(failsafe) == 1 and ends[0] < failsafe[0] <= ends[1], (ends, failsafe)
+    flown = behavior_events(record)
+
+    # The simulator's side, as explore makes it: the flight's simulated twin (the same
+    # mission from where the flight started), then the fault at the twin's end:TAKE_OFF.
+    twin = tmp_path / "twin.mcap"
+    made = replay_recording(
+        record, ReplayOptions(mode=Mode.closed, mission=str(mission), output=str(twin), twin=True)
+    )
+    assert made.error is None, made.error
+    struck = tmp_path / "struck.mcap"
+    injection = parse_injection(f"{fault.simulated}@end:TAKE_OFF")
+    options = ReplayOptions(
+        mode=Mode.closed, mission=str(mission), output=str(struck), injections=(injection,)
+    )
+    replayed = replay_recording(twin, options)
+    assert replayed.error is None, replayed.error
+    simulated = behavior_events(struck)
+
+    # Without the fault every goal is reached: the failures are the fault's.
+    assert [code for _, code, _ in behavior_events(twin)] == ["GOAL_ACHIEVED"] * 4
+    decided = [
+        ("TAKE_OFF", "GOAL_ACHIEVED"),
+        ("GO_TO_POINT", "PROCESS_FAILURE"),  # the leg the fault struck in
+        ("GO_TO_POINT", "PROCESS_FAILURE"),  # refused at its start: the vehicle is landing
+        ("LAND", "GOAL_ACHIEVED"),
+    ]
+    assert [(name, code) for name, code, _ in flown] == decided, flown
+    assert [(name, code) for name, code, _ in simulated] == decided, simulated
+    # The explained difference: the cause each failure names, and nothing else.
+    assert [detail for _, _, detail in simulated[1:3]] == [
+        f"vehicle fault: {fault.reports}",
+        f"on_start failed: VehicleCommandError: go_to: refused, {fault.refusal}; "
+        f"vehicle fault: {fault.reports}",
+    ]
+    assert [detail for _, _, detail in flown[1:3]] == [
+        "vehicle fault: mode_changed:LAND",
+        "on_start failed: VehicleCommandError: go_to: refused, the autopilot is in LAND "
+        "mode, not GUIDED; vehicle fault: mode_changed:LAND",
+    ]
+    # The executive never learns the battery is low over MAVLink: the charge it gets
+    # (SYS_STATUS battery_remaining) is computed from the mAh used, not the voltage.
+    charges = [s["battery"] for _, s in topics_with_times(record, "vehicle/state")]
+    assert min(charges) > 0.9, min(charges)
+    # Nor that the position is lost: LOCAL_POSITION_NED goes on after the failsafe (the
+    # EKF's dead reckoning without GPS), so the position belief stays.
+    positions = [
+        t
+        for t, r in topics_with_times(record, "mavlink/rx")
+        if r["type"] == "LOCAL_POSITION_NED" and t > failsafe[0]
+    ]
+    assert len(positions) > 10, len(positions)
+    # The same properties hold on both.
+    safety = load_properties(["aeroexec:safety"])
+    verdicts = [
+        {v.name: v.status for v in check_recording(path, safety).verdicts}
+        for path in (record, struck)
+    ]
+    assert verdicts[0] == verdicts[1] and set(verdicts[0].values()) == {"held"}, verdicts
