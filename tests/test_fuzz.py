@@ -19,7 +19,7 @@ from aeroexec.catalog.arguments import check_arguments
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.fuzz.oracle import Bench, Target, reference_problem, run_mission
-from aeroexec.fuzz.search import Budget, fuzz
+from aeroexec.fuzz.search import Budget, Finding, fuzz, trimmed
 from aeroexec.fuzz.steps import (
     ACTIVATE,
     EXECUTE,
@@ -169,6 +169,35 @@ def test_the_search_finds_and_shrinks_a_landing_that_times_out() -> None:
     assert len(commands(mission)) <= 10
     assert mission[0] == Command(EXECUTE, "TAKE_OFF")
     assert any(c.behavior == "GO_TO_POINT" for c in commands(mission))
+
+
+def test_each_finding_is_trimmed_to_the_steps_its_own_property_needs() -> None:
+    """A mission shrunk under another property keeps steps this one does not need (a
+    rotation, a second take-off, a fault): the deletion pass removes each of them, keeps
+    what the violation needs, and the fuzzer applies it to every finding it reports."""
+    target = Target(str(DEFAULT_CATALOG))
+    bench = Bench.of(target)
+    high = Command(EXECUTE, "GO_TO_POINT", (("COORDINATES", [0, 0, 100]),))
+    padded = (
+        Command(EXECUTE, "TAKE_OFF"),
+        Command(EXECUTE, "ROTATE", (("ANGLE", 90),)),
+        high,
+        Command(EXECUTE, "TAKE_OFF"),
+        Fault("low_battery", 600),
+    )
+    names = [v.name for v in run_mission(bench, padded).violations]
+    assert names == ["ends_landed_disarmed"]
+    finding = trimmed(bench, Finding("ends_landed_disarmed", "as found", padded))
+    assert finding.mission == (Command(EXECUTE, "TAKE_OFF"), high)
+    assert finding.message.startswith("the vehicle ends the session landed and disarmed")
+    assert [v.name for v in run_mission(bench, finding.mission).violations] == names
+    # what the property does not catch is not trimmed into it: a safe mission stays
+    safe = (Command(EXECUTE, "TAKE_OFF"),)
+    assert trimmed(bench, Finding("ends_landed_disarmed", "?", safe)).mission == safe
+    # the fuzzer reports findings trimmed (here the database's, re-run first)
+    report = fuzz(target, Budget(runs=1), seed_value=0, database=[padded])
+    reported = {f.name: f.mission for f in report.findings}
+    assert reported["ends_landed_disarmed"] == finding.mission
 
 
 def test_the_same_seed_finds_the_same_and_another_seed_searches_elsewhere() -> None:

@@ -14,8 +14,8 @@ from aeroexec.errors import AeroexecError
 from aeroexec.fuzz.crosscheck import STATIC_ONLY, cross_check
 from aeroexec.fuzz.oracle import Bench, Target, run_files, run_mission
 from aeroexec.fuzz.output import write_counterexample
-from aeroexec.fuzz.search import Budget, fuzz
-from aeroexec.fuzz.steps import commands
+from aeroexec.fuzz.search import Budget, Finding, fuzz
+from aeroexec.fuzz.steps import EXECUTE, Command, commands
 from aeroexec.properties.check import VIOLATED, check_recording
 from aeroexec.verifier.engine import verify_catalog_file
 
@@ -65,6 +65,51 @@ def test_every_planted_error_is_witnessed_or_static_only_with_a_reason(path: Pat
             assert row.finding.rule in STATIC_ONLY, f"{path.stem} needs its reason"
     names = {f.name for f in report.findings}
     assert names <= set(WITNESSED.values()), names
+
+
+@pytest.mark.parametrize(
+    "path", [PLANTED / "AX602.yaml", PLANTED / "AX604.yaml"], ids=["AX602", "AX604"]
+)
+def test_a_timeout_shorter_than_its_goal_breaks_no_property(path: Path) -> None:
+    """The planted catalogs have no take-off (the vehicle never leaves the ground), and
+    their behavior's TIME_OUT is an answer: the fuzzer finds nothing, and the rule's
+    static-only reason says why."""
+    report = fuzz(Target(str(path), allow_unimplemented=True), Budget(runs=100), seed_value=0)
+    assert report.findings == []
+    assert "TIME_OUT" in STATIC_ONLY[path.stem]
+
+
+@pytest.mark.parametrize(("go_to", "land"), [(30, 15), (30, 300), (300, 15), (300, 300)])
+def test_landing_in_time_depends_on_lands_timeout_not_go_to_points(
+    tmp_path: Path, go_to: int, land: int
+) -> None:
+    """AX604's catalog given a take-off and a landing, climbing as high as it allows: the
+    vehicle ends in the air exactly when LAND's timeout is short, whether GO_TO_POINT's
+    covers the travel (300 s) or not (30 s, AX604), so the violation is no witness of
+    AX604 and the cross-check does not call it one."""
+    planted = (PLANTED / "AX604.yaml").read_text(encoding="utf-8")
+    flown = planted.replace("timeout: 30", f"timeout: {go_to}").replace(
+        "behavior_descriptors:\n",
+        "behavior_descriptors:\n"
+        "  - behavior: TAKE_OFF\n    timeout: 30\n    recurrent: no\n"
+        f"  - behavior: LAND\n    timeout: {land}\n    recurrent: no\n",
+    )
+    catalog = tmp_path / "flown.yaml"
+    catalog.write_text(flown, encoding="utf-8")
+    static = verify_catalog_file(catalog).findings
+    assert ("AX604" in {f.rule for f in static}) == (go_to == 30)
+    bench = Bench.of(Target(str(catalog), allow_unimplemented=True))
+    climb = (
+        Command(EXECUTE, "TAKE_OFF"),
+        Command(EXECUTE, "GO_TO_POINT", (("COORDINATES", [0, 0, 100]),)),
+    )
+    judgement = run_mission(bench, climb)
+    names = [v.name for v in judgement.violations]
+    assert names == (["ends_landed_disarmed"] if land == 15 else [])
+    if names:
+        finding = Finding(names[0], judgement.violations[0].message, climb)
+        (row,) = cross_check(bench.catalog, [finding], static).dynamic
+        assert row.matches == ()
 
 
 def test_a_counterexample_fails_the_same_way_a_hundred_times(tmp_path: Path) -> None:

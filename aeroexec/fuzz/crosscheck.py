@@ -18,17 +18,19 @@ from aeroexec.fuzz.search import Finding
 from aeroexec.fuzz.steps import Fault, commands, ending_for
 from aeroexec.verifier.findings import Finding as StaticFinding
 
-#: Which verifier rules describe a defect that can make each property fail.
+#: Which verifier rules describe a defect that can make each property fail. Not AX602 or
+#: AX604 (a timeout shorter than a duration or a travel): their defect ends the behavior
+#: in TIME_OUT, which answers its activation and lands nothing in the air (`STATIC_ONLY`).
 CAUSES: dict[str, tuple[str, ...]] = {
     "compatible_capabilities": ("AX301", "AX302", "AX303", "AX304", "AX305"),
-    "ends_landed_disarmed": ("AX201", "AX301", "AX304", "AX401", "AX402", "AX602", "AX604"),
-    "activations_answered": ("AX601", "AX602", "AX604"),
+    "ends_landed_disarmed": ("AX201", "AX301", "AX304", "AX401", "AX402"),
+    "activations_answered": ("AX601",),
     "grounded_lands": (),
 }
 #: Faults after which the simulated vehicle cannot be landed by anything a catalog says.
 WORLD_FAULTS = ("stuck_motor",)
 
-#: Why a verifier error has no dynamic witness, by rule.
+#: Why a verifier finding has no dynamic witness, by rule.
 STATIC_ONLY: dict[str, str] = {
     "AX101": "the executive refuses a catalog without an error tag: nothing runs",
     "AX105": "the executive refuses a value of the wrong type: nothing runs",
@@ -48,6 +50,12 @@ STATIC_ONLY: dict[str, str] = {
     "AX304": "the resource manager checks capabilities on every activation and refuses "
     "the second behavior: a refusal, not a violation",
     "AX502": "the activation needing the cycle is refused: a refusal, not a violation",
+    "AX602": "the wait ends in TIME_OUT before its duration: an answered activation, with "
+    "the vehicle where it was (hovering or landed), which no safety property forbids",
+    "AX604": "the flight ends in TIME_OUT short of its target: an answered activation, "
+    "the vehicle hovering where it got, which no safety property forbids; a landing "
+    "that then times out in the air is the landing behavior's timeout, not this one "
+    "(it fails as well when this timeout covers the travel)",
 }
 DEFAULT_REASON = "no generated mission broke a property through it within the budget"
 

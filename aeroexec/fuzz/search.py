@@ -70,6 +70,34 @@ def findings_of(violations: Iterable[Violation], mission: Mission) -> list[Findi
     return [Finding(v.name, v.message, mission) for v in violations]
 
 
+#: At most this many missions are run to trim one finding (a dozen steps need fewer
+#: than 80: a pass is one run a step, and each pass but the last removes one).
+MAX_TRIM_RUNS = 200
+
+
+def trimmed(bench: Bench, finding: Finding, max_runs: int = MAX_TRIM_RUNS) -> Finding:
+    """`finding` with every step (command or fault) removed that its property does not
+    need: each in turn, kept out when the mission without it still violates the same
+    property, until no single removal does. Hypothesis shrinks a mission under the first
+    property it violates, so the finding of a second property keeps the first one's
+    steps; this pass shrinks under each property. A pure function of the finding."""
+    mission, message = finding.mission, finding.message
+    runs = 0
+    removed = True
+    while removed and runs < max_runs:
+        removed = False
+        index = 0
+        while index < len(mission) and runs < max_runs:
+            shorter = mission[:index] + mission[index + 1 :]
+            runs += 1
+            same = [v for v in run_mission(bench, shorter).violations if v.name == finding.name]
+            if same:
+                mission, message, removed = shorter, same[0].message, True
+            else:
+                index += 1
+    return Finding(finding.name, message, mission)
+
+
 #: A mission's seed for mutation (`-m`), or None to generate from scratch.
 MutationSource = Callable[[Bench], "st.SearchStrategy[Mission]"]
 
@@ -299,5 +327,5 @@ def fuzz(
             wave = [task(index + i, CHUNK_RUNS) for i in range(max(1, waves))]
             index += len(wave)
             collect(runner(wave))
-    report.findings = sorted(found.values(), key=lambda f: f.name)
+    report.findings = [trimmed(bench, found[name]) for name in sorted(found)]
     return report
