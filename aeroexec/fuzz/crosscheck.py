@@ -27,8 +27,10 @@ CAUSES: dict[str, tuple[str, ...]] = {
     "activations_answered": ("AX601",),
     "grounded_lands": (),
 }
-#: Faults after which the simulated vehicle cannot be landed by anything a catalog says.
-WORLD_FAULTS = ("stuck_motor",)
+#: Faults after which the simulated vehicle cannot be landed by anything a catalog says:
+#: a seized motor holds it where it is; during a lost link every command, the landing
+#: included, is refused, so a mission that ends then leaves it flying.
+WORLD_FAULTS = ("stuck_motor", "lost_link")
 
 #: Why a verifier finding has no dynamic witness, by rule.
 STATIC_ONLY: dict[str, str] = {
