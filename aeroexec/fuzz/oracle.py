@@ -182,19 +182,8 @@ def run_mission(bench: Bench, mission: Mission, record: str | Path | None = None
     script = compile_mission(text, MISSION_NAME)
     monitor = PropertyMonitor(bench.properties)
     invariants = Invariants()
-    target = bench.target
-    config = SessionConfig(
-        mission=MISSION_NAME,
-        catalog=target.catalog,
-        seed=target.seed,
-        world=WORLD_NAME,
-        record=record,
-        behaviors=bench.behaviors,
-        allow_unimplemented=target.allow_unimplemented,
-        max_sim_time_s=MAX_SIM_TIME_S,
-    )
     result = simulate(
-        config,
+        _session(bench, MISSION_NAME, WORLD_NAME, record),
         [monitor, invariants],
         catalog=bench.catalog,
         script=script,
@@ -223,8 +212,16 @@ def run_files(bench: Bench, mission: Path, world: Path, record: Path | None) -> 
     (the script and world read from their files), judged as the fuzzer judged it."""
     monitor = PropertyMonitor(bench.properties)
     invariants = Invariants()
+    config = _session(bench, mission, world, record)
+    return judge(monitor, invariants, simulate(config, [monitor, invariants]))
+
+
+def _session(
+    bench: Bench, mission: str | Path, world: str | Path, record: str | Path | None
+) -> SessionConfig:
+    """The session every judged run has: the fuzzed catalog's settings, its time limit."""
     target = bench.target
-    config = SessionConfig(
+    return SessionConfig(
         mission=mission,
         catalog=target.catalog,
         seed=target.seed,
@@ -234,4 +231,3 @@ def run_files(bench: Bench, mission: Path, world: Path, record: Path | None) -> 
         allow_unimplemented=target.allow_unimplemented,
         max_sim_time_s=MAX_SIM_TIME_S,
     )
-    return judge(monitor, invariants, simulate(config, [monitor, invariants]))
