@@ -38,12 +38,13 @@ def write_mission(tmp_path: Path, body: str) -> Path:
 
 
 @contextmanager
-def mavsim_thread(url: str, **overrides: Any) -> Iterator[MavSim]:
-    """A MavSim serving `url` from a thread (5x speed, 4 Hz heartbeats, EKF ready after
-    0.5 vehicle seconds, unless `overrides` say otherwise)."""
+def mavsim_thread(url: str, *, kind: type[MavSim] = MavSim, **overrides: Any) -> Iterator[MavSim]:
+    """A MavSim (or the subclass `kind`: an autopilot that misbehaves on purpose)
+    serving `url` from a thread (5x speed, 4 Hz heartbeats, EKF ready after 0.5 vehicle
+    seconds, unless `overrides` say otherwise)."""
     settings: dict[str, Any] = {"speed_factor": 5.0, "heartbeat_hz": 4.0, "ekf_delay": 0.5}
     settings.update(overrides)
-    sim = MavSim(MavSimConfig(url=url, **settings))
+    sim = kind(MavSimConfig(url=url, **settings))
     stop = threading.Event()
     thread = threading.Thread(target=sim.run, args=(stop.is_set,), daemon=True)
     thread.start()

@@ -625,6 +625,21 @@ def test_wrong_type(old: str, new: str, needle: str, message: str) -> None:
     assert at(errors[0].mark) == where(text, needle)
 
 
+@pytest.mark.parametrize(
+    ("old", "new", "shown"),
+    [
+        ("timeout: 30", "timeout: " + "x" * 100_000, "got str ('" + "x" * 40 + "...')"),
+        ("timeout: 30", "timeout: " + "9" * 4000, "got int (" + "9" * 40 + "...)"),
+    ],
+)
+def test_a_huge_wrong_value_is_shown_cut_short(old: str, new: str, shown: str) -> None:
+    # Issue 23's hostile files: a 100 KB word where a number belongs was echoed whole,
+    # one 100 KB line per finding; the place already says where the rest is.
+    catalog = parse_catalog(BASE.replace(old, new))
+    (error,) = [d for d in catalog.diagnostics if d.severity is Severity.ERROR]
+    assert error.message.endswith(shown) and len(error.message) < 200, error.message[:300]
+
+
 def test_section_of_the_wrong_shape() -> None:
     text = "behavior_descriptors: 5\ncapability_descriptors:\n  - just a name\n"
     catalog = parse_catalog(text)

@@ -81,3 +81,20 @@ def test_ci_runs_the_readmes_test_command_through_the_constraints() -> None:
     test_command = next(c for c in commands if "pytest" in c)
     assert test_command in ci.splitlines()
     assert all("-c constraints.txt" in c for c in commands)
+
+
+def test_the_readmes_commands_to_move_and_to_try_the_pins_exist() -> None:
+    # Issue 23: one documented command keeps constraints.txt current, a second tests
+    # against the newest releases; a README naming a script that is gone helps no one.
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    named = set(re.findall(r"`(scripts/[\w-]+)`", readme))
+    assert {"scripts/update-constraints", "scripts/test-newest"} <= named
+    for script in named:
+        path = ROOT / script
+        assert path.is_file() and os.access(path, os.X_OK), script
+    lines = (ROOT / "constraints.txt").read_text().splitlines()
+    header = " ".join(line for line in lines if line.startswith("#"))
+    assert "scripts/update-constraints" in header and "scripts/test-newest" in header
+    # The refresh writes the very file CI installs through.
+    refresh = (ROOT / "scripts" / "update-constraints").read_text()
+    assert "mv constraints.txt.new constraints.txt" in refresh

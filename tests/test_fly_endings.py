@@ -18,14 +18,17 @@ from pathlib import Path
 from typing import Any
 
 from live_helpers import cpu_loaded, free_tcp_port, free_udp_port, mavsim_thread, write_mission
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from typer.testing import CliRunner
 
 from aeroexec.cli import app
 from aeroexec.executive.bus import MemoryObserver, TopicRecord
 from aeroexec.executive.clock import WallClock
+from aeroexec.mavlink.sim_peer import MavSim
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
+from aeroexec.vehicles.mavlink.convert import LAND
 
 AIRBORNE = (
     "    api.executeBehavior('TAKE_OFF')\n"
@@ -418,3 +421,36 @@ def test_a_hold_the_autopilot_does_not_show_is_not_reported_held(tmp_path: Path)
     assert "aeroexec fly: vehicle not landed: hold not confirmed: the link was lost while" in (
         result.stderr
     )
+
+
+class AcceptsLandButStaysGuided(MavSim):
+    """An autopilot that acknowledges LAND and goes on hovering in GUIDED (as one whose
+    mode change another GCS or a failing mode check overrides would look)."""
+
+    def _enter_mode(self, mode: int) -> int:
+        if mode == LAND:
+            return mavlink.MAV_RESULT_ACCEPTED
+        return super()._enter_mode(mode)
+
+
+def test_a_land_the_autopilot_acknowledges_but_does_not_show_is_not_reported(
+    tmp_path: Path,
+) -> None:
+    """Issue 24.1: an ending is reported from the autopilot's HEARTBEAT, not from its
+    COMMAND_ACK; LAND not seen within the bound is said so, and fly exits 1."""
+    port = free_udp_port()
+    mission = write_mission(tmp_path, AIRBORNE)
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", kind=AcceptsLandButStaysGuided) as sim:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
+        )
+        final = sim.stats()["final"]
+    assert result.exit_code == 1, result.output
+    assert "ending: switched to LAND: NOT seen in LAND within 5 s" in result.stdout
+    assert "seen in LAND " not in result.stdout.replace("NOT seen in LAND", "")
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith(
+        "aeroexec fly: vehicle not landed: LAND not confirmed: the autopilot still says "
+        "GUIDED 5 s after it acknowledged LAND; last seen flying at ("
+    ), last
+    assert final["mode"] == "GUIDED" and final["flying"]

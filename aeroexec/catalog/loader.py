@@ -31,7 +31,7 @@ from aeroexec.catalog.model import (
     PackedMarks,
     Severity,
 )
-from aeroexec.catalog.yamlnodes import YNode, load_yaml
+from aeroexec.catalog.yamlnodes import YNode, load_yaml, short_repr
 from aeroexec.errors import CatalogError, Mark
 from aeroexec.gc_pause import paused_gc
 from aeroexec.inputs import read_text
@@ -141,7 +141,8 @@ def _refuse_other_formats(root: YNode) -> None:
 
 
 def node_kind(node: YNode) -> str:
-    """`mapping`, `list`, `null` or `int (5)`: what a value is, for messages."""
+    """`mapping`, `list`, `null` or `int (5)`: what a value is, for messages (a long
+    value cut short)."""
     return _kind(node)
 
 
@@ -152,7 +153,7 @@ def _kind(node: YNode) -> str:
         return "list"
     if node.value is None:
         return "null"
-    return f"{type(node.value).__name__} ({node.value!r})"
+    return f"{type(node.value).__name__} ({short_repr(node.value)})"
 
 
 class NameRefs(NamedTuple):

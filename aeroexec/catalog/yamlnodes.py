@@ -437,13 +437,18 @@ class _Builder:
         except (yaml.YAMLError, ValueError, OverflowError, KeyError) as exc:
             # KeyError: `!!bool xyz`; ValueError: `!!int xyz`, or an int of 5,000 digits.
             problem = "not a boolean" if isinstance(exc, KeyError) else " ".join(str(exc).split())
-            raise CatalogError(f"bad scalar {_short(event.value)}: {problem}", mark) from None
+            raise CatalogError(f"bad scalar {short_repr(event.value)}: {problem}", mark) from None
         self.scalars[key] = value
         return value
 
 
-def _short(value: str, limit: int = 40) -> str:
-    return repr(value if len(value) <= limit else value[:limit] + "...")
+def short_repr(value: object, limit: int = 40) -> str:
+    """`value` as a message shows it: a word as its repr, anything cut after `limit`
+    characters (a hostile file's 100 KB word is not echoed whole, once per finding)."""
+    if isinstance(value, str):
+        return repr(value if len(value) <= limit else value[:limit] + "...")
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def _offset_mark(file: str, text: str, offset: int) -> Mark:
