@@ -8,6 +8,7 @@ one, say which in one stderr line, and exit 128 + signal.
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import signal
@@ -208,3 +209,55 @@ def test_import_removes_its_partial_file(tmp_path: Path) -> None:
     line = stopped(process, signal.SIGINT)
     assert line.endswith(f"the partial output was removed, {out} not written")
     assert not out.exists() and not partial.exists()
+
+
+def test_explore_keeps_its_violations_whole_and_names_what_stays(tmp_path: Path) -> None:
+    out = tmp_path / "whatif"
+    process = start(
+        "explore",
+        str(REPO / "recordings" / "appendix_c-v0.1.0.mcap"),
+        "--trust-recording",
+        "--offsets",
+        "0,0.5,1,1.5,2,3,4,5",
+        "--output-dir",
+        str(out),
+        cwd=tmp_path,
+    )
+    when(lambda: out.exists() and any(out.glob("*.mcap")), process)  # a violation kept
+    line = stopped(process, signal.SIGTERM)
+    # The runs in flight were finalized in a scratch folder that is gone by now: the
+    # line names what stays, not a file the user cannot find.
+    assert ".explore-" not in line, line
+    match = re.search(r"(\d+) of (\d+) runs done, (\d+) violating run\(s\) kept in (.+)$", line)
+    assert match, line
+    done, total, kept = (int(match[i]) for i in (1, 2, 3))
+    assert 0 < done < total and match[4] == str(out)
+    left = sorted(p.name for p in out.iterdir())
+    assert len(left) == kept and all(name.endswith(".mcap") for name in left), left
+    for path in out.glob("*.mcap"):
+        assert open_recording(path).complete, path
+
+
+def test_fuzz_keeps_every_failing_mission_it_found(tmp_path: Path) -> None:
+    out = tmp_path / "fuzz"
+    catalog = REPO / "aeroexec" / "data" / "catalog" / "default.yaml"
+    base = ("fuzz", str(catalog), "--seed", "1", "--output-dir", str(out))
+    process = start(*base, "--budget", "600s", cwd=tmp_path)
+    database = out / "failures.json"
+    when(database.exists, process)  # saved as soon as the search found something
+    line = stopped(process, signal.SIGTERM)
+    match = re.search(r"the (\d+) failing mission\(s\) found so far are in (\S+):", line)
+    assert match and match[2] == str(database), line
+    saved = json.loads(database.read_text(encoding="utf-8"))["missions"]
+    assert len(saved) == int(match[1]) > 0
+    # The next run starts with them and writes each one up.
+    again = subprocess.run(
+        [sys.executable, "-m", "aeroexec", *base, "--budget", "1"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=WAIT_S,
+    )
+    assert again.returncode == 1, again.stderr
+    written = {p.name.split("-", 1)[1] for p in out.iterdir() if p.is_dir()}
+    assert written == {entry["property"] for entry in saved}

@@ -123,8 +123,8 @@ def fuzz(
     (DIR/failures.json) run first.
 
     Exit code 0 when nothing was violated, 1 when something was, 2 when an input could
-    not be used, 128+N when stopped by signal N (the counterexamples already written
-    are whole).
+    not be used, 128+N when stopped by signal N (every failing mission found so far is
+    in DIR/failures.json: the next run starts with them and writes them up).
     """
     try:
         parsed = Budget.parse(budget)

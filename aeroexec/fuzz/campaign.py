@@ -19,6 +19,7 @@ from aeroexec.errors import FuzzError, Mark
 from aeroexec.fuzz.mutate import mission_steps
 from aeroexec.fuzz.oracle import Bench, Target, run_mission
 from aeroexec.fuzz.output import (
+    DATABASE,
     Written,
     folder_name,
     read_database,
@@ -27,7 +28,16 @@ from aeroexec.fuzz.output import (
     write_database,
     write_findings,
 )
-from aeroexec.fuzz.search import CHUNK_RUNS, Budget, ChunkResult, ChunkTask, FuzzReport, fuzz
+from aeroexec.fuzz.search import (
+    CHUNK_RUNS,
+    Budget,
+    ChunkResult,
+    ChunkTask,
+    Finding,
+    FuzzReport,
+    fuzz,
+)
+from aeroexec.interrupts import Interrupted
 from aeroexec.progress import ProgressFactory
 from aeroexec.replay.executors import LOCAL, executor_for
 
@@ -84,16 +94,33 @@ def run_campaign(campaign: Campaign, progress: ProgressFactory | None = None) ->
                 advance(seconds)
                 shown[0] += seconds
 
-            report = fuzz(
-                target,
-                budget,
-                seed_value=campaign.seed,
-                database=database,
-                origin=origin,
-                runner=runner,
-                waves=campaign.jobs,
-                on_chunk=on_chunk,
-            )
+            saved: list[list[Finding]] = []
+
+            def on_found(findings: list[Finding]) -> None:
+                # Saved as found: a signal, a crash or a killed CI job keeps every
+                # failing mission, and the next run starts with them.
+                write_database(out, target.catalog, findings)
+                saved[:] = [findings]
+
+            try:
+                report = fuzz(
+                    target,
+                    budget,
+                    seed_value=campaign.seed,
+                    database=database,
+                    origin=origin,
+                    runner=runner,
+                    waves=campaign.jobs,
+                    on_chunk=on_chunk,
+                    on_found=on_found,
+                )
+            except Interrupted as stop:
+                if saved and saved[0]:
+                    stop.notes.append(
+                        f"the {len(saved[0])} failing mission(s) found so far are in "
+                        f"{out / DATABASE}: the next run starts with them and writes them up"
+                    )
+                raise
     written = tuple(
         write_counterexample(bench, out / folder_name(i, f.name), f, campaign.seed)
         for i, f in enumerate(report.findings, 1)

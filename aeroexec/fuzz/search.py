@@ -286,10 +286,13 @@ def fuzz(
     runner: Runner = inline,
     waves: int = 1,
     on_chunk: Callable[[ChunkResult], None] | None = None,
+    on_found: Callable[[list[Finding]], None] | None = None,
     clock: Callable[[], float] = time.monotonic,
 ) -> FuzzReport:
     """Re-run the database's missions, then search. `waves`: how many chunks a time
-    budget hands the runner at once (its parallelism)."""
+    budget hands the runner at once (its parallelism). `on_found` is given every finding
+    so far (untrimmed, by name) once the database has run and whenever a chunk finds
+    something new or smaller, so a search stopped early loses nothing it found."""
     bench = Bench.of(target_)
     found: dict[str, Finding] = {}
     report = FuzzReport([], 0)
@@ -301,11 +304,16 @@ def fuzz(
         else:
             report.fixed += 1
     report.replayed = sorted(found)
+    if on_found is not None and database:
+        on_found([found[name] for name in sorted(found)])
 
     def collect(results: Iterable[ChunkResult]) -> None:
         for result in results:
             report.runs += result.runs
+            before = dict(found)
             keep_smallest(found, result.findings)
+            if on_found is not None and found != before:
+                on_found([found[name] for name in sorted(found)])
             if result.error:
                 report.errors.append(result.error)
             if on_chunk is not None:

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from aeroexec.errors import Mark, RecordingError
+from aeroexec.interrupts import Interrupted
 from aeroexec.plugins.discovery import BehaviorSources
 from aeroexec.properties.spec import load_properties
 from aeroexec.recording.reader import open_recording
@@ -239,6 +240,16 @@ def explore(
             results[done.index] = judged
             if on_done is not None:
                 on_done(judged)
+    except Interrupted as stop:
+        # The runs in flight were finalized in the scratch folder, which goes now: say
+        # what stays instead.
+        stop.notes[:] = [n for n in stop.notes if str(scratch) not in n]
+        finished = [r for r in results if r is not None]
+        kept = sum(1 for r in finished if r.kept is not None)
+        stop.notes.append(
+            f"{len(finished)} of {len(results)} runs done, {kept} violating run(s) kept in {out}"
+        )
+        raise
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     missing = [i for i, r in enumerate(results) if r is None]
