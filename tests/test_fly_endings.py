@@ -17,7 +17,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from live_helpers import cpu_loaded, free_tcp_port, free_udp_port, mavsim_thread, write_mission
+import pytest
+from live_helpers import (
+    AeroexecProcess,
+    cpu_loaded,
+    free_tcp_port,
+    free_udp_port,
+    mavsim_thread,
+    write_mission,
+)
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from typer.testing import CliRunner
 
@@ -621,3 +629,60 @@ def test_a_brake_before_landing_never_seen_to_stop_fails_the_landing(tmp_path: P
     assert ending["down"]  # it did come down ...
     assert re.fullmatch(f"brake before landing not confirmed: {moving}", ending["problem"])
     assert re.fullmatch(f"braked: NOT seen holding: {moving}", ending["actions"][1])
+
+
+class DriftsUntilTheLinkDrops(DriftsOnWhenBraked):
+    """Drifts on when braked until its heartbeats were dropped; brakes as it should after."""
+
+    def _drift(self) -> None:
+        if self.counters.dropped_heartbeats == 0:
+            super()._drift()
+
+
+def test_a_link_lost_while_braking_before_landing_does_not_stop_the_landing(
+    tmp_path: Path,
+) -> None:
+    """The link is lost while the ending brakes (in BRAKE) before LAND, and comes back;
+    --failsafe hold leaves a vehicle in BRAKE as it is. The landing then starts over:
+    braked again, seen holding, LAND seen, seen down; fly exits 1 for the lost link. It
+    used to wait for ever with the vehicle holding in BRAKE."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, LEG_THEN_RETURN)
+    # The mission returns ~3.5 s after the take-off; the first brake drifts on for 10 s.
+    drop = {"drop_heartbeats_at": 6.0, "drop_for": 2.0}
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", kind=DriftsUntilTheLinkDrops, speed_factor=1.0, **drop
+    ) as sim:
+        proc = AeroexecProcess(
+            [
+                *("fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"),
+                *("--heartbeat-timeout", "0.5", "--failsafe", "hold", "-o", str(record)),
+            ]
+        )
+        try:
+            code, out, err = proc.finish(40)
+        except subprocess.TimeoutExpired:
+            pytest.fail("fly still waiting 40 s on; it printed:\n" + "".join(proc.out))
+        finally:
+            proc.kill()
+        final = sim.stats()["final"]
+    assert final["mode"] == "LAND" and not final["flying"] and not final["armed"]
+    assert code == 1, out + err
+    lines = [line for line in out.splitlines() if line.startswith("ending: ")]
+    assert lines[:2] == [
+        "ending: inhibited GO_TO_POINT",
+        "ending: braked: NOT seen holding: the link was lost while braking",
+    ]
+    assert lines[2].startswith("ending: braked: seen holding in BRAKE at ("), lines
+    assert re.fullmatch(r"ending: switched to LAND: seen in LAND \d+\.\d s later", lines[3])
+    assert lines[4].startswith("ending: vehicle on the ground at ("), lines
+    assert (
+        err.strip()
+        .splitlines()[-1]
+        .startswith(
+            "aeroexec fly: the link was lost 1 time during the flight; vehicle on the ground at ("
+        )
+    ), err
+    ending = recorded_ending(record)
+    assert ending["down"] and ending["problem"] == ""

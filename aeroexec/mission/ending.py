@@ -10,11 +10,12 @@ state keeps being recorded:
    comes back, the vehicle's failsafe (`--failsafe`) runs first;
 3. `on_exit` is applied to a vehicle that is airborne (or armed): `land` brakes a
    vehicle moving in GUIDED first, in BRAKE (a LAND at speed touches down metres on,
-   wherever its descent ends), switches to
-   LAND (unless the autopilot is already landing or returning) and waits, bounded, for
-   landed and disarmed, disarming a vehicle left armed on the ground; `hold` brakes and
-   holds in GUIDED and leaves it to the autopilot's own GCS failsafe; `none` leaves the
-   vehicle as it is. A vehicle flying in a mode aeroexec did not command (a pilot took
+   wherever its descent ends), switches to LAND (unless the autopilot is already
+   landing or returning) and waits, bounded, for landed and disarmed, disarming a
+   vehicle left armed on the ground (a link lost while braking: once it is back, and
+   the failsafe has run, the landing starts over); `hold` brakes and holds in GUIDED
+   and leaves it to the autopilot's own GCS failsafe; `none` leaves the vehicle as it
+   is. A vehicle flying in a mode aeroexec did not command (a pilot took
    over with the sticks, or was flying it when aeroexec connected) is left to whoever
    has it: aeroexec never takes a vehicle away from a pilot.
 
@@ -190,7 +191,8 @@ def _land(
                     actions,
                     f"{mode} was not commanded by aeroexec: a pilot or the autopilot has it",
                 )
-            if vehicle.telemetry.custom_mode == GUIDED and vehicle.telemetry.speed > STILL_SPEED:
+            moving = vehicle.telemetry.speed > STILL_SPEED
+            if vehicle.telemetry.custom_mode in (GUIDED, BRAKE) and (moving or unbraked):
                 # Brake first, in BRAKE (the hardest stop ArduCopter makes): a LAND at
                 # speed is braked during the descent, and the vehicle touches down
                 # metres on (SITL at 7.7 m/s: 11-19 m).
@@ -198,6 +200,10 @@ def _land(
                 # and the ending says so.
                 unbraked = _brake(stepper, vehicle, actions, BRAKE)
                 if vehicle.link_lost:
+                    # Once the link is back (and --failsafe has run) the landing starts
+                    # over from what the autopilot then says: left in BRAKE (failsafe
+                    # hold), it would otherwise hold there, and fly wait, for ever.
+                    commanded = False
                     continue
             beats = vehicle.telemetry.heartbeats
             action = _tell(vehicle.bring_down)
