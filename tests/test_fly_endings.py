@@ -677,12 +677,73 @@ def test_a_link_lost_while_braking_before_landing_does_not_stop_the_landing(
     assert lines[2].startswith("ending: braked: seen holding in BRAKE at ("), lines
     assert re.fullmatch(r"ending: switched to LAND: seen in LAND \d+\.\d s later", lines[3])
     assert lines[4].startswith("ending: vehicle on the ground at ("), lines
-    assert (
-        err.strip()
-        .splitlines()[-1]
-        .startswith(
-            "aeroexec fly: the link was lost 1 time during the flight; vehicle on the ground at ("
-        )
+    last = err.strip().splitlines()[-1]
+    assert last.startswith(
+        "aeroexec fly: the link was lost 1 time during the flight; vehicle on the ground at ("
     ), err
     ending = recorded_ending(record)
     assert ending["down"] and ending["problem"] == ""
+
+
+#: A take-off the autopilot refuses after it armed (mavsim --refuse MAV_CMD_NAV_TAKEOFF):
+#: the mission fails with the vehicle armed on the ground.
+TAKE_OFF_ONLY = "    return api.executeBehavior('TAKE_OFF')\n"
+REFUSED_TAKE_OFF = (mavlink.MAV_CMD_NAV_TAKEOFF,)
+
+
+def test_a_vehicle_left_armed_on_the_ground_is_disarmed_as_seen(tmp_path: Path) -> None:
+    """The ending disarms a vehicle left armed on the ground and says so from a HEARTBEAT
+    heard after the disarm. It used to leave it armed: the ending came before the first
+    HEARTBEAT after the arm, and the one before it (disarmed) counted as down."""
+    port = free_udp_port()
+    mission = write_mission(tmp_path, TAKE_OFF_ONLY)
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", refuse=REFUSED_TAKE_OFF) as sim:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
+        )
+        final = sim.stats()["final"]
+    assert not final["armed"] and not final["flying"]
+    assert result.exit_code == 1, result.output  # the take-off failed
+    lines = [line for line in result.stdout.splitlines() if line.startswith("ending: ")]
+    assert len(lines) == 2 and re.fullmatch(
+        r"ending: disarmed: seen disarmed \d+\.\d s later", lines[0]
+    )
+    assert lines[1] == "ending: vehicle on the ground at (0.00, 0.00, 0.00) m in GUIDED, disarmed"
+
+
+class AcksDisarmButStaysArmed(MavSim):
+    """An autopilot that acknowledges a disarm and stays armed, as its HEARTBEAT says."""
+
+    def _execute(self, command: int, msg: Any) -> int:
+        if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM and msg.param1 < 0.5:
+            return mavlink.MAV_RESULT_ACCEPTED
+        return super()._execute(command, msg)
+
+
+def test_a_disarm_acknowledged_but_never_seen_is_not_reported_disarmed(tmp_path: Path) -> None:
+    """Issue 24.1: the disarm's COMMAND_ACK is not a disarm; not seen in a HEARTBEAT within
+    20 s (the bound of a disarm on the ground), fly says so and records it."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, TAKE_OFF_ONLY)
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", kind=AcksDisarmButStaysArmed, refuse=REFUSED_TAKE_OFF
+    ) as sim:
+        result = CliRunner().invoke(
+            app,
+            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
+        )
+        final = sim.stats()["final"]
+    assert final["armed"] and not final["flying"]  # as it misbehaves
+    assert result.exit_code == 1, result.output
+    assert "ending: NOT seen disarmed within 20 s: on the ground, armed\n" in result.stdout
+    assert "seen disarmed" not in result.stdout.replace("NOT seen disarmed", "")
+    assert result.stderr.strip().splitlines()[-1] == (
+        "aeroexec fly: vehicle not landed: disarm not confirmed: the autopilot still says on "
+        "the ground, armed 20 s after it acknowledged the disarm; last seen on the ground at "
+        "(0.00, 0.00, 0.00) m in GUIDED, armed"
+    )
+    ending = recorded_ending(record)
+    assert not ending["down"]
+    assert ending["actions"] == ["NOT seen disarmed within 20 s: on the ground, armed"]
+    assert ending["problem"].startswith("disarm not confirmed: the autopilot still says on the")

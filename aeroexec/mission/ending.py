@@ -23,7 +23,8 @@ Every step is confirmed from the autopilot's own telemetry before it is reported
 never assumed from what was sent: a brake by a HEARTBEAT in its mode and `STILL_FOR_S` of
 LOCAL_POSITION_NED slower than `STILL_SPEED` (within `BRAKE_BOUND_S`); LAND by a
 HEARTBEAT in LAND (within `MODE_BOUND_S`); landed and disarmed by EXTENDED_SYS_STATE
-and a HEARTBEAT (within the landing's bound). The actions say what was seen; a step not
+and a HEARTBEAT heard after the ending's last command (within the landing's bound, or
+`LANDING_MARGIN_S` for a disarm on the ground). The actions say what was seen; a step not
 seen within its bound is said so, and the ending has a `problem` (fly exits 1), even when
 the vehicle came down after all (a brake never seen to stop: it landed wherever LAND
 found it, not where it was braked).
@@ -173,7 +174,11 @@ def _land(
     deadline = bound = math.inf
     since = ""  # what the landing's bound counts from
     unbraked = ""  # why a brake before the landing was not seen to stop
-    while not vehicle.down:
+    on_ground = False  # armed on the ground: the ending disarms it
+    disarmed_at: float | None = None  # when that disarm was acknowledged
+    # Heartbeats heard before the ending's last command: down must be said by a later one.
+    before = -1
+    while not (vehicle.down and vehicle.telemetry.heartbeats > before):
         if vehicle.link_lost:
             if not _wait_for_link(stepper, vehicle, link_timeout):
                 return _ending(
@@ -205,7 +210,7 @@ def _land(
                     # hold), it would otherwise hold there, and fly wait, for ever.
                     commanded = False
                     continue
-            beats = vehicle.telemetry.heartbeats
+            beats = before = vehicle.telemetry.heartbeats
             action = _tell(vehicle.bring_down)
             mode = vehicle.telemetry.custom_mode
             if action.startswith("left it in ") and vehicle.telemetry.heard_mode != mode:
@@ -244,14 +249,30 @@ def _land(
             bound = _landing_bound(vehicle)
             deadline = stepper.now + bound
         elif not vehicle.telemetry.flying and vehicle.telemetry.armed and not commanded:
-            # Armed on the ground (a take-off that failed after arming): disarm it.
-            commanded = True
-            actions.append(_tell(lambda: (vehicle.disarm(), "disarmed")[1]))
-            since = "the disarm command"
+            # Armed on the ground (a take-off that failed after arming): disarm it. The
+            # acknowledgement is not the disarm: the HEARTBEAT must say so.
+            commanded = on_ground = True
+            before = vehicle.telemetry.heartbeats
+            try:
+                vehicle.disarm()
+                disarmed_at = stepper.now
+                since = "it acknowledged the disarm"
+            except VehicleCommandError as exc:
+                actions.append(f"disarm failed: {exc}")
+                since = "the disarm failed"
             bound = LANDING_MARGIN_S
             deadline = stepper.now + bound
         if stepper.now > deadline:
             said = _landed_as_said(vehicle)
+            if on_ground:
+                actions.append(f"NOT seen disarmed within {bound:.0f} s: {said}")
+                return _ending(
+                    vehicle,
+                    actions,
+                    f"disarm not confirmed: the autopilot still says {said} {bound:.0f} s "
+                    f"after {since}",
+                    True,
+                )
             actions.append(f"NOT seen landed and disarmed within {bound:.0f} s: {said}")
             return _ending(
                 vehicle,
@@ -261,6 +282,8 @@ def _land(
                 True,
             )
         stepper.step()
+    if disarmed_at is not None:
+        actions.append(f"disarmed: seen disarmed {stepper.now - disarmed_at:.1f} s later")
     if unbraked:
         return _ending(vehicle, actions, f"brake before landing not confirmed: {unbraked}", True)
     return _ending(vehicle, actions, "")
