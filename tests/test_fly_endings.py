@@ -17,7 +17,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from live_helpers import cpu_loaded, free_tcp_port, free_udp_port, mavsim_thread, write_mission
+import pytest
+from live_helpers import (
+    AeroexecProcess,
+    cpu_loaded,
+    free_tcp_port,
+    free_udp_port,
+    mavsim_thread,
+    write_mission,
+)
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from typer.testing import CliRunner
 
@@ -28,7 +36,7 @@ from aeroexec.mavlink.sim_peer import MavSim
 from aeroexec.mission.live import FlightConfig, fly
 from aeroexec.recording import open_recording
 from aeroexec.recording.reader import RecordedTopic
-from aeroexec.vehicles.mavlink.convert import LAND
+from aeroexec.vehicles.mavlink.convert import BRAKE, GUIDED, LAND
 
 AIRBORNE = (
     "    api.executeBehavior('TAKE_OFF')\n"
@@ -454,3 +462,288 @@ def test_a_land_the_autopilot_acknowledges_but_does_not_show_is_not_reported(
         "GUIDED 5 s after it acknowledged LAND; last seen flying at ("
     ), last
     assert final["mode"] == "GUIDED" and final["flying"]
+
+
+def recorded_ending(record: Path) -> dict[str, Any]:
+    """The `mavlink/link` `ending` event of a complete recording."""
+    recording = open_recording(record)
+    assert recording.complete
+    (ending,) = (
+        item.data
+        for item in recording.records()
+        if isinstance(item, RecordedTopic)
+        and item.name == "mavlink/link"
+        and item.data["event"] == "ending"
+    )
+    return ending
+
+
+class ShowsLandButNeverComesDown(MavSim):
+    """An autopilot that acknowledges LAND, shows it in its HEARTBEAT and says it is
+    landing (EXTENDED_SYS_STATE), but whose vehicle never comes down and stays armed (as
+    a descent held off by a rangefinder that reads the ground too far would look)."""
+
+    def _enter_mode(self, mode: int) -> int:
+        result = super()._enter_mode(mode)
+        if mode == LAND and self.flying:
+            self.sim.hover()
+        return result
+
+
+NOT_DOWN = re.compile(r"ending: NOT seen landed and disarmed within (\d+) s: landing, armed\n")
+
+
+def test_a_land_seen_but_never_seen_down_is_not_reported_landed(tmp_path: Path) -> None:
+    """Issue 24.1: LAND in the HEARTBEAT is not a landing. Landed and disarmed must be seen
+    (EXTENDED_SYS_STATE, HEARTBEAT) within the landing's bound (20 s + 4 s per metre of
+    height + 1 s per metre from home: 25 s here, on fly's wall clock, which mavsim's
+    speed-up does not shorten); not seen, fly says so, exits 1 and records it."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, AIRBORNE)
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", kind=ShowsLandButNeverComesDown) as sim:
+        result = CliRunner().invoke(
+            app,
+            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
+        )
+        final = sim.stats()["final"]
+    assert final["mode"] == "LAND" and final["flying"] and final["armed"]  # as it misbehaves
+    assert result.exit_code == 1, result.output
+    assert re.search(r"ending: switched to LAND: seen in LAND \d+\.\d s later\n", result.stdout)
+    bound = NOT_DOWN.search(result.stdout)
+    assert bound is not None, result.stdout
+    assert 24 <= int(bound.group(1)) <= 26, result.stdout  # 20 s + 4 s x 1 m + 1 s x 1 m
+    assert "on the ground" not in result.output
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith(
+        "aeroexec fly: vehicle not landed: landing not confirmed: the autopilot still says "
+        f"landing, armed {bound.group(1)} s after LAND was seen; last seen flying at (1.0"
+    ), last
+    assert last.endswith(" m in LAND, armed"), last
+    ending = recorded_ending(record)
+    assert not ending["down"]
+    assert ending["actions"][-1].startswith("NOT seen landed and disarmed within ")
+    assert ending["problem"].startswith("landing not confirmed: the autopilot still says landing")
+
+
+class DriftsOnWhenBraked(MavSim):
+    """An autopilot that acknowledges BRAKE and shows it, and takes every zero-velocity
+    setpoint in GUIDED, but whose vehicle never stops: it drifts on at `DRIFT` m/s (as
+    one in wind stronger than it can fight would), until LAND holds it over a point."""
+
+    DRIFT = 1.0  # m/s, as LOCAL_POSITION_NED reports it
+
+    def _drift(self) -> None:
+        if self.flying:
+            self.sim.set_velocity(0.0, self.DRIFT / self.config.speed_factor, 0.0)
+
+    def _enter_mode(self, mode: int) -> int:
+        result = super()._enter_mode(mode)
+        if mode == BRAKE:
+            self._drift()
+        return result
+
+    def _setpoint(self, msg: Any) -> None:
+        super()._setpoint(msg)
+        zero = (msg.vx, msg.vy, msg.vz) == (0.0, 0.0, 0.0) and msg.type_mask & 0b111
+        if zero and self.mode == GUIDED:
+            self._drift()
+
+
+#: The mission returns with the vehicle flying a 30 m leg. At mavsim's own speed (1x) it
+#: is below 2 m/s then, so the brake's bound (8 s + 1 s per m/s) stays near 10 s.
+LEG_THEN_RETURN = (
+    "    api.executeBehavior('TAKE_OFF')\n"
+    "    api.activateBehavior('GO_TO_POINT', coordinates=[0, 30, 1])\n"
+    "    return api.executeBehavior('WAIT', duration=1)\n"
+)
+STILL_MOVING = r"still 1\.00 m/s in {mode} (\d+) s after the brake"
+
+
+def test_a_hold_never_seen_to_stop_is_not_reported_held(tmp_path: Path) -> None:
+    """Issue 24.1: a zero-velocity setpoint is never acknowledged, so only the autopilot's
+    velocity shows a hold. It stays at 1 m/s: fly says it was NOT seen holding, exits 1
+    and records it."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, LEG_THEN_RETURN)
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", kind=DriftsOnWhenBraked, speed_factor=1.0
+    ) as sim:
+        result = CliRunner().invoke(
+            app,
+            [
+                *("fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"),
+                *("--on-exit", "hold", "-o", str(record)),
+            ],
+        )
+        final = sim.stats()["final"]
+    assert final["mode"] == "GUIDED" and final["flying"]
+    assert sim.counters.setpoints["velocity"] >= 2  # braked, and braked again
+    assert result.exit_code == 1, result.output
+    moving = STILL_MOVING.format(mode="GUIDED")
+    assert re.search(f"ending: braked: NOT seen holding: {moving}\n", result.stdout), result.stdout
+    assert "seen holding" not in result.stdout.replace("NOT seen holding", "")
+    last = result.stderr.strip().splitlines()[-1]
+    assert re.match(
+        f"aeroexec fly: vehicle not landed: hold not confirmed: {moving}; last seen flying ", last
+    ), last
+    ending = recorded_ending(record)
+    assert not ending["down"]
+    assert re.fullmatch(f"braked: NOT seen holding: {moving}", ending["actions"][-1])
+    assert re.fullmatch(f"hold not confirmed: {moving}", ending["problem"])
+
+
+def test_a_brake_before_landing_never_seen_to_stop_fails_the_landing(tmp_path: Path) -> None:
+    """Issue 24.1 and 24.5: the vehicle is braked (BRAKE, acknowledged and shown) before
+    LAND so that it lands where it stopped. It never stops: fly lands it all the same
+    (the safest thing left) but says the brake was NOT seen, exits 1 although the vehicle
+    came down, and records it."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, LEG_THEN_RETURN)
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", kind=DriftsOnWhenBraked, speed_factor=1.0
+    ) as sim:
+        result = CliRunner().invoke(
+            app,
+            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
+        )
+        final = sim.stats()["final"]
+    assert final["mode"] == "LAND" and not final["flying"] and not final["armed"]
+    assert result.exit_code == 1, result.output
+    moving = STILL_MOVING.format(mode="BRAKE")
+    lines = [line for line in result.stdout.splitlines() if line.startswith("ending: ")]
+    assert lines[0] == "ending: inhibited GO_TO_POINT"
+    assert re.fullmatch(f"ending: braked: NOT seen holding: {moving}", lines[1]), lines
+    assert re.fullmatch(r"ending: switched to LAND: seen in LAND \d+\.\d s later", lines[2])
+    assert lines[3].startswith("ending: vehicle on the ground at (")
+    assert "seen holding" not in result.stdout.replace("NOT seen holding", "")
+    last = result.stderr.strip().splitlines()[-1]
+    assert re.fullmatch(
+        r"aeroexec fly: vehicle on the ground at \(.+\) m in LAND, disarmed; "
+        f"brake before landing not confirmed: {moving}",
+        last,
+    ), last
+    ending = recorded_ending(record)
+    assert ending["down"]  # it did come down ...
+    assert re.fullmatch(f"brake before landing not confirmed: {moving}", ending["problem"])
+    assert re.fullmatch(f"braked: NOT seen holding: {moving}", ending["actions"][1])
+
+
+class DriftsUntilTheLinkDrops(DriftsOnWhenBraked):
+    """Drifts on when braked until its heartbeats were dropped; brakes as it should after."""
+
+    def _drift(self) -> None:
+        if self.counters.dropped_heartbeats == 0:
+            super()._drift()
+
+
+def test_a_link_lost_while_braking_before_landing_does_not_stop_the_landing(
+    tmp_path: Path,
+) -> None:
+    """The link is lost while the ending brakes (in BRAKE) before LAND, and comes back;
+    --failsafe hold leaves a vehicle in BRAKE as it is. The landing then starts over:
+    braked again, seen holding, LAND seen, seen down; fly exits 1 for the lost link. It
+    used to wait for ever with the vehicle holding in BRAKE."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, LEG_THEN_RETURN)
+    # The mission returns ~3.5 s after the take-off; the first brake drifts on for 10 s.
+    drop = {"drop_heartbeats_at": 6.0, "drop_for": 2.0}
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", kind=DriftsUntilTheLinkDrops, speed_factor=1.0, **drop
+    ) as sim:
+        proc = AeroexecProcess(
+            [
+                *("fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"),
+                *("--heartbeat-timeout", "0.5", "--failsafe", "hold", "-o", str(record)),
+            ]
+        )
+        try:
+            code, out, err = proc.finish(40)
+        except subprocess.TimeoutExpired:
+            pytest.fail("fly still waiting 40 s on; it printed:\n" + "".join(proc.out))
+        finally:
+            proc.kill()
+        final = sim.stats()["final"]
+    assert final["mode"] == "LAND" and not final["flying"] and not final["armed"]
+    assert code == 1, out + err
+    lines = [line for line in out.splitlines() if line.startswith("ending: ")]
+    assert lines[:2] == [
+        "ending: inhibited GO_TO_POINT",
+        "ending: braked: NOT seen holding: the link was lost while braking",
+    ]
+    assert lines[2].startswith("ending: braked: seen holding in BRAKE at ("), lines
+    assert re.fullmatch(r"ending: switched to LAND: seen in LAND \d+\.\d s later", lines[3])
+    assert lines[4].startswith("ending: vehicle on the ground at ("), lines
+    last = err.strip().splitlines()[-1]
+    assert last.startswith(
+        "aeroexec fly: the link was lost 1 time during the flight; vehicle on the ground at ("
+    ), err
+    ending = recorded_ending(record)
+    assert ending["down"] and ending["problem"] == ""
+
+
+#: A take-off the autopilot refuses after it armed (mavsim --refuse MAV_CMD_NAV_TAKEOFF):
+#: the mission fails with the vehicle armed on the ground.
+TAKE_OFF_ONLY = "    return api.executeBehavior('TAKE_OFF')\n"
+REFUSED_TAKE_OFF = (mavlink.MAV_CMD_NAV_TAKEOFF,)
+
+
+def test_a_vehicle_left_armed_on_the_ground_is_disarmed_as_seen(tmp_path: Path) -> None:
+    """The ending disarms a vehicle left armed on the ground and says so from a HEARTBEAT
+    heard after the disarm. It used to leave it armed: the ending came before the first
+    HEARTBEAT after the arm, and the one before it (disarmed) counted as down."""
+    port = free_udp_port()
+    mission = write_mission(tmp_path, TAKE_OFF_ONLY)
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", refuse=REFUSED_TAKE_OFF) as sim:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
+        )
+        final = sim.stats()["final"]
+    assert not final["armed"] and not final["flying"]
+    assert result.exit_code == 1, result.output  # the take-off failed
+    lines = [line for line in result.stdout.splitlines() if line.startswith("ending: ")]
+    assert len(lines) == 2 and re.fullmatch(
+        r"ending: disarmed: seen disarmed \d+\.\d s later", lines[0]
+    )
+    assert lines[1] == "ending: vehicle on the ground at (0.00, 0.00, 0.00) m in GUIDED, disarmed"
+
+
+class AcksDisarmButStaysArmed(MavSim):
+    """An autopilot that acknowledges a disarm and stays armed, as its HEARTBEAT says."""
+
+    def _execute(self, command: int, msg: Any) -> int:
+        if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM and msg.param1 < 0.5:
+            return mavlink.MAV_RESULT_ACCEPTED
+        return super()._execute(command, msg)
+
+
+def test_a_disarm_acknowledged_but_never_seen_is_not_reported_disarmed(tmp_path: Path) -> None:
+    """Issue 24.1: the disarm's COMMAND_ACK is not a disarm; not seen in a HEARTBEAT within
+    20 s (the bound of a disarm on the ground), fly says so and records it."""
+    port = free_udp_port()
+    record = tmp_path / "flight.mcap"
+    mission = write_mission(tmp_path, TAKE_OFF_ONLY)
+    with mavsim_thread(
+        f"udpout:127.0.0.1:{port}", kind=AcksDisarmButStaysArmed, refuse=REFUSED_TAKE_OFF
+    ) as sim:
+        result = CliRunner().invoke(
+            app,
+            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
+        )
+        final = sim.stats()["final"]
+    assert final["armed"] and not final["flying"]  # as it misbehaves
+    assert result.exit_code == 1, result.output
+    assert "ending: NOT seen disarmed within 20 s: on the ground, armed\n" in result.stdout
+    assert "seen disarmed" not in result.stdout.replace("NOT seen disarmed", "")
+    assert result.stderr.strip().splitlines()[-1] == (
+        "aeroexec fly: vehicle not landed: disarm not confirmed: the autopilot still says on "
+        "the ground, armed 20 s after it acknowledged the disarm; last seen on the ground at "
+        "(0.00, 0.00, 0.00) m in GUIDED, armed"
+    )
+    ending = recorded_ending(record)
+    assert not ending["down"]
+    assert ending["actions"] == ["NOT seen disarmed within 20 s: on the ground, armed"]
+    assert ending["problem"].startswith("disarm not confirmed: the autopilot still says on the")

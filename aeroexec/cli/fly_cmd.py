@@ -220,7 +220,8 @@ def fly_command(
     --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle
     ended landed and disarmed with the link never lost; 1 when the mission raised, a
     behavior ended PROCESS_FAILURE (the autopilot refused a command, or the vehicle had
-    a fault), the link was lost or the vehicle did not end landed and disarmed; 2 when
+    a fault), the link was lost, the vehicle did not end landed and disarmed or a step of
+    its ending was not seen in the autopilot's telemetry within its bound; 2 when
     an input could not be read or the autopilot never answered; 128+N when stopped by
     signal N (after the ending).
     """

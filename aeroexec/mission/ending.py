@@ -10,11 +10,12 @@ state keeps being recorded:
    comes back, the vehicle's failsafe (`--failsafe`) runs first;
 3. `on_exit` is applied to a vehicle that is airborne (or armed): `land` brakes a
    vehicle moving in GUIDED first, in BRAKE (a LAND at speed touches down metres on,
-   wherever its descent ends), switches to
-   LAND (unless the autopilot is already landing or returning) and waits, bounded, for
-   landed and disarmed, disarming a vehicle left armed on the ground; `hold` brakes and
-   holds in GUIDED and leaves it to the autopilot's own GCS failsafe; `none` leaves the
-   vehicle as it is. A vehicle flying in a mode aeroexec did not command (a pilot took
+   wherever its descent ends), switches to LAND (unless the autopilot is already
+   landing or returning) and waits, bounded, for landed and disarmed, disarming a
+   vehicle left armed on the ground (a link lost while braking: once it is back, and
+   the failsafe has run, the landing starts over); `hold` brakes and holds in GUIDED
+   and leaves it to the autopilot's own GCS failsafe; `none` leaves the vehicle as it
+   is. A vehicle flying in a mode aeroexec did not command (a pilot took
    over with the sticks, or was flying it when aeroexec connected) is left to whoever
    has it: aeroexec never takes a vehicle away from a pilot.
 
@@ -22,8 +23,11 @@ Every step is confirmed from the autopilot's own telemetry before it is reported
 never assumed from what was sent: a brake by a HEARTBEAT in its mode and `STILL_FOR_S` of
 LOCAL_POSITION_NED slower than `STILL_SPEED` (within `BRAKE_BOUND_S`); LAND by a
 HEARTBEAT in LAND (within `MODE_BOUND_S`); landed and disarmed by EXTENDED_SYS_STATE
-and a HEARTBEAT. The actions say what was seen; a step not seen within its bound is
-said so, and the ending is not `down` (fly exits 1).
+and a HEARTBEAT heard after the ending's last command (within the landing's bound, or
+`LANDING_MARGIN_S` for a disarm on the ground). The actions say what was seen; a step not
+seen within its bound is said so, and the ending has a `problem` (fly exits 1), even when
+the vehicle came down after all (a brake never seen to stop: it landed wherever LAND
+found it, not where it was braked).
 
 A signal during the waits (a second Ctrl-C) stops waiting: the vehicle keeps doing what
 it was told. The result says whether the vehicle ended landed and disarmed, and the one
@@ -73,13 +77,21 @@ class Ending:
     last_seen: str
     #: What `end_flight` did, in order ("inhibited GO_TO_POINT", "switched to LAND", ...).
     actions: tuple[str, ...]
-    #: Why the vehicle may not be down: "" when it is.
+    #: Why the vehicle may not be down, or a step of the ending that was not seen: ""
+    #: when the vehicle is down and every step was seen.
     problem: str = ""
+
+    @property
+    def confirmed(self) -> bool:
+        """Seen landed and disarmed, every step of the ending seen as it was meant."""
+        return self.down and not self.problem
 
     def line(self) -> str:
         """One line for the operator."""
-        if self.down:
+        if self.confirmed:
             return f"vehicle {self.last_seen}"
+        if self.down:
+            return f"vehicle {self.last_seen}; {self.problem}"
         return f"vehicle not landed: {self.problem}; last seen {self.last_seen}"
 
 
@@ -160,7 +172,13 @@ def _land(
 ) -> Ending:
     commanded = False
     deadline = bound = math.inf
-    while not vehicle.down:
+    since = ""  # what the landing's bound counts from
+    unbraked = ""  # why a brake before the landing was not seen to stop
+    on_ground = False  # armed on the ground: the ending disarms it
+    disarmed_at: float | None = None  # when that disarm was acknowledged
+    # Heartbeats heard before the ending's last command: down must be said by a later one.
+    before = -1
+    while not (vehicle.down and vehicle.telemetry.heartbeats > before):
         if vehicle.link_lost:
             if not _wait_for_link(stepper, vehicle, link_timeout):
                 return _ending(
@@ -178,14 +196,21 @@ def _land(
                     actions,
                     f"{mode} was not commanded by aeroexec: a pilot or the autopilot has it",
                 )
-            if vehicle.telemetry.custom_mode == GUIDED and vehicle.telemetry.speed > STILL_SPEED:
+            moving = vehicle.telemetry.speed > STILL_SPEED
+            if vehicle.telemetry.custom_mode in (GUIDED, BRAKE) and (moving or unbraked):
                 # Brake first, in BRAKE (the hardest stop ArduCopter makes): a LAND at
                 # speed is braked during the descent, and the vehicle touches down
                 # metres on (SITL at 7.7 m/s: 11-19 m).
-                _brake(stepper, vehicle, actions, BRAKE)  # unconfirmed: it lands anyway
+                # Not seen to stop, it is landed all the same (the safest thing left),
+                # and the ending says so.
+                unbraked = _brake(stepper, vehicle, actions, BRAKE)
                 if vehicle.link_lost:
+                    # Once the link is back (and --failsafe has run) the landing starts
+                    # over from what the autopilot then says: left in BRAKE (failsafe
+                    # hold), it would otherwise hold there, and fly wait, for ever.
+                    commanded = False
                     continue
-            beats = vehicle.telemetry.heartbeats
+            beats = before = vehicle.telemetry.heartbeats
             action = _tell(vehicle.bring_down)
             mode = vehicle.telemetry.custom_mode
             if action.startswith("left it in ") and vehicle.telemetry.heard_mode != mode:
@@ -201,8 +226,12 @@ def _land(
                         True,
                     )
                 actions.append(action)
+                since = f"{mode_name(mode)} was seen"
             elif action != "switched to LAND":
+                # Left in a mode already heard (LAND, RTL), or LAND failed.
                 actions.append(action)
+                left = action.startswith("left it in ")
+                since = f"{mode_name(mode)} was seen" if left else "LAND failed"
             else:
                 seen = _see_mode(stepper, vehicle, LAND, beats)
                 if seen is None:
@@ -216,18 +245,54 @@ def _land(
                         True,
                     )
                 actions.append(f"switched to LAND: seen in LAND {seen:.1f} s later")
+                since = "LAND was seen"
             bound = _landing_bound(vehicle)
             deadline = stepper.now + bound
         elif not vehicle.telemetry.flying and vehicle.telemetry.armed and not commanded:
-            # Armed on the ground (a take-off that failed after arming): disarm it.
-            commanded = True
-            actions.append(_tell(lambda: (vehicle.disarm(), "disarmed")[1]))
+            # Armed on the ground (a take-off that failed after arming): disarm it. The
+            # acknowledgement is not the disarm: the HEARTBEAT must say so.
+            commanded = on_ground = True
+            before = vehicle.telemetry.heartbeats
+            try:
+                vehicle.disarm()
+                disarmed_at = stepper.now
+                since = "it acknowledged the disarm"
+            except VehicleCommandError as exc:
+                actions.append(f"disarm failed: {exc}")
+                since = "the disarm failed"
             bound = LANDING_MARGIN_S
             deadline = stepper.now + bound
         if stepper.now > deadline:
-            return _ending(vehicle, actions, f"still not down {bound:.0f} s after the command")
+            said = _landed_as_said(vehicle)
+            if on_ground:
+                actions.append(f"NOT seen disarmed within {bound:.0f} s: {said}")
+                return _ending(
+                    vehicle,
+                    actions,
+                    f"disarm not confirmed: the autopilot still says {said} {bound:.0f} s "
+                    f"after {since}",
+                    True,
+                )
+            actions.append(f"NOT seen landed and disarmed within {bound:.0f} s: {said}")
+            return _ending(
+                vehicle,
+                actions,
+                f"landing not confirmed: the autopilot still says {said} {bound:.0f} s after "
+                f"{since}",
+                True,
+            )
         stepper.step()
+    if disarmed_at is not None:
+        actions.append(f"disarmed: seen disarmed {stepper.now - disarmed_at:.1f} s later")
+    if unbraked:
+        return _ending(vehicle, actions, f"brake before landing not confirmed: {unbraked}", True)
     return _ending(vehicle, actions, "")
+
+
+def _landed_as_said(vehicle: MavlinkVehicle) -> str:
+    """What the autopilot last said of its landing: "landing, armed"."""
+    t = vehicle.telemetry
+    return f"{t.landed_state_name}, {'armed' if t.heard_armed else 'disarmed'}"
 
 
 def _see_mode(stepper: _Stepper, vehicle: MavlinkVehicle, mode: int, beats: int) -> float | None:
@@ -311,12 +376,11 @@ def _landing_bound(vehicle: MavlinkVehicle) -> float:
 def _ending(
     vehicle: MavlinkVehicle, actions: list[str], problem: str, unconfirmed: bool = False
 ) -> Ending:
+    """The ending as last seen; `unconfirmed`: `problem` is a step not seen, which stays
+    a problem even if the vehicle is down."""
     down = vehicle.down and not vehicle.link_lost and vehicle.target is not None
-    return Ending(
-        down=down and not unconfirmed,
-        last_seen=vehicle.last_seen(),
-        actions=tuple(actions),
-        problem=""
-        if down and not unconfirmed
-        else (problem or "it was never seen landed and disarmed"),
-    )
+    if down and not unconfirmed:
+        problem = ""
+    elif not problem:
+        problem = "it was never seen landed and disarmed"
+    return Ending(down=down, last_seen=vehicle.last_seen(), actions=tuple(actions), problem=problem)

@@ -134,8 +134,9 @@ class FlightResult(SessionResult):
 
     @property
     def safe(self) -> bool:
-        """The vehicle ended landed and disarmed, and the link never dropped."""
-        return self.ending is not None and self.ending.down and self.link_losses == 0
+        """The vehicle ended landed and disarmed, every step of the ending seen, and the
+        link never dropped."""
+        return self.ending is not None and self.ending.confirmed and self.link_losses == 0
 
     def mission_failures(self) -> tuple[Activation, ...]:
         """The activations that ended PROCESS_FAILURE: the behavior could not do what the
@@ -151,7 +152,7 @@ class FlightResult(SessionResult):
         """Why the flight is not `safe`, in one line ("" when it is)."""
         if self.safe or self.ending is None:
             return ""
-        if self.ending.down:
+        if self.ending.confirmed:
             losses = self.link_losses
             return (
                 f"the link was lost {losses} time{'s' if losses > 1 else ''} during the "

@@ -25,6 +25,14 @@ _AIRBORNE_STATES = (
     mavlink.MAV_LANDED_STATE_TAKEOFF,
     mavlink.MAV_LANDED_STATE_LANDING,
 )
+#: EXTENDED_SYS_STATE's landed states, as an ending says what the autopilot said.
+_LANDED_STATE_NAMES = {
+    mavlink.MAV_LANDED_STATE_UNDEFINED: "no landed state",
+    mavlink.MAV_LANDED_STATE_ON_GROUND: "on the ground",
+    mavlink.MAV_LANDED_STATE_IN_AIR: "in the air",
+    mavlink.MAV_LANDED_STATE_TAKEOFF: "taking off",
+    mavlink.MAV_LANDED_STATE_LANDING: "landing",
+}
 
 
 #: The messages `Telemetry.apply` folds into the state.
@@ -131,6 +139,11 @@ class Telemetry:
     @property
     def heard_mode_name(self) -> str:
         return "no mode" if self.heard_mode < 0 else mode_name(self.heard_mode)
+
+    @property
+    def landed_state_name(self) -> str:
+        """EXTENDED_SYS_STATE's landed state as the autopilot last said it: "landing"."""
+        return _LANDED_STATE_NAMES.get(self.landed_state, f"landed state {self.landed_state}")
 
     @property
     def speed(self) -> float:

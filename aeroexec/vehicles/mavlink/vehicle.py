@@ -762,8 +762,10 @@ class MavlinkVehicle:
     @property
     def down(self) -> bool:
         """Landed and disarmed, as the autopilot last said (EXTENDED_SYS_STATE and its
-        HEARTBEAT: never assumed from a command sent)."""
-        return not self.telemetry.flying and not self.telemetry.heard_armed
+        HEARTBEAT: never assumed from a command sent). An arm acknowledged since that
+        HEARTBEAT counts as armed: the HEARTBEAT is older than the arm."""
+        t = self.telemetry
+        return not t.flying and not t.heard_armed and not t.armed
 
     def bring_down(self) -> str:
         """LAND, unless the autopilot is already landing or returning; what was done."""
