@@ -204,6 +204,8 @@ def test_the_abort_service_lands_the_vehicle_and_parameters_are_read_only(
     assert "vehicle landed" in out
     recording = open_recording(record)
     assert recording.complete
+    # recorded as what it was: an operator's abort, not a violated property
+    assert recording.metadata["aeroexec_end"]["reason"] == "abort"
     assert recording.metadata["aeroexec_end"]["detail"] == "aborted by a live viewer"
     assert_parity(client, record)
     # the ending is recorded: the behaviors inhibited, then a landing

@@ -306,7 +306,7 @@ def report_outcome(result: SessionResult, debug: bool, vehicle: bool) -> bool:
             error_line(f"{where}mission stopped: {outcome.error} (--max-sim-time)")
         elif outcome.ending is Ending.TIMEOUT:
             error_line(f"{where}mission stopped: {outcome.error}")
-        elif outcome.ending is Ending.STOPPED:
+        elif outcome.ending.stopped:
             done = "; ".join(getattr(result, "assurance", ()) or ())
             error_line(f"mission stopped: {outcome.error}" + (f" ({done})" if done else ""))
         else:

@@ -582,7 +582,7 @@ class LiveView:
                 return {"ok": False, "error": "no mission is running"}
             self._mission = False
             action = self.options.abort_action
-            executive.request_stop("aborted by a live viewer", action)
+            executive.request_stop("aborted by a live viewer", action, by="abort")
         return {"ok": True, "action": action}
 
     def close(self) -> None:
