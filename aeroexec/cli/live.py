@@ -1,4 +1,5 @@
-"""`--live` on `run` and `fly`: the options, and the live view around the session.
+"""`--live` on `run`, `fly` and `replay`: the options, and the live view around the
+session.
 
 The servers (aeroexec/viz/live.py) import foxglove-sdk and rerun: they are imported only
 when `--live` is given, so `run` and `fly` start as fast as before without it.
@@ -6,6 +7,7 @@ when `--live` is given, so `run` and `fly` start as fast as before without it.
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -70,6 +72,14 @@ def check_live_options(
 ) -> None:
     if not live and (port is not None or rerun_port is not None or wait_viewer):
         raise AeroexecError("--port, --rerun-port and --wait-viewer are for --live: add --live")
+
+
+def live_speed(speed: float | None, live: bool) -> float | None:
+    """The pacing `--speed` asks for, checked: with --live real time (1) unless given;
+    without, as fast as it computes (None) unless given."""
+    if speed is not None and not (speed > 0 and math.isfinite(speed)):
+        raise AeroexecError(f"invalid value for --speed: {speed:g}: give a factor above 0")
+    return speed if speed is not None or not live else 1.0
 
 
 @contextmanager

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,6 +17,7 @@ from aeroexec.cli.live import (
     PortOption,
     RerunPortOption,
     WaitViewerOption,
+    live_speed,
     live_view,
 )
 from aeroexec.cli.options import (
@@ -203,8 +203,7 @@ def run(
     """
     apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
-    if speed is not None and not (speed > 0 and math.isfinite(speed)):
-        raise AeroexecError(f"invalid value for --speed: {speed:g}: give a factor above 0")
+    speed = live_speed(speed, live)
     if allow_remote and not live:
         raise AeroexecError("--allow-remote is for --live: add --live")
     settings = project()
@@ -233,7 +232,7 @@ def run(
             color,
             settings,
             view,
-            speed if speed is not None or not live else 1.0,
+            speed,
         )
 
 
