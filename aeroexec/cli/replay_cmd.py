@@ -336,6 +336,8 @@ def replay(
     rerun+http://127.0.0.1:9876/proxy) carry the replay's own recording; a viewer may
     call /abort_mission to stop it (docs/view.md). One recording, replayed here (not
     with -j or --executor ray): a viewer shows one session at a time.
+
+    \b
       aeroexec replay flight.mcap --catalog new.yaml --live --wait-viewer
 
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
