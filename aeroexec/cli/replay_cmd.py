@@ -332,8 +332,8 @@ def replay(
 
     With --live, one replay is served as it runs, paced to the recording's time
     (--speed), as `run --live` serves a run: a Foxglove WebSocket server (Foxglove,
-    Lichtblick: ws://127.0.0.1:8765) and a Rerun gRPC stream (rerun
-    rerun+http://127.0.0.1:9876/proxy) carry the replay's own recording; a viewer may
+    Lichtblick: ws://127.0.0.1:8765) and, with --rerun-port 9876, a Rerun gRPC stream
+    (rerun rerun+http://127.0.0.1:9876/proxy) carry the replay's own recording; a viewer may
     call /abort_mission to stop it (docs/view.md). One recording, replayed here (not
     with -j or --executor ray): a viewer shows one session at a time.
 

@@ -187,8 +187,9 @@ def run(
         aeroexec run missions/appendix_c.py -o flight.mcap --live --wait-viewer
 
     With --live the session is served as it happens (Foxglove, Lichtblick: connect to
-    ws://127.0.0.1:8765; Rerun: rerun rerun+http://127.0.0.1:9876/proxy), at real time
-    unless --speed; a viewer may call the service /abort_mission, and the vehicle lands.
+    ws://127.0.0.1:8765; with --rerun-port 9876, Rerun too: rerun
+    rerun+http://127.0.0.1:9876/proxy), at real time unless --speed; a viewer may call
+    the service /abort_mission, and the vehicle lands.
 
     Behaviors come from -b/--behaviors, the project's [tool.aeroexec] table (nearest
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
