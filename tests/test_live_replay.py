@@ -124,14 +124,20 @@ def test_paced_keeps_a_flights_recorded_ticks_to_the_wall_clock() -> None:
     assert clock.now_ns() == ticks[-1]
 
 
+@pytest.mark.parametrize(
+    "how",
+    [pytest.param([], id="recorded-commands"), pytest.param(["--trust-recording"], id="script")],
+)
 def test_a_viewers_abort_stops_the_replay_and_is_recorded_as_an_abort(
-    tmp_path: Path, procs: list[AeroexecProcess]
+    tmp_path: Path, procs: list[AeroexecProcess], how: list[str]
 ) -> None:
     mission = write_mission(tmp_path, PATROL)
     record = tmp_path / "patrol.mcap"
     assert aeroexec("run", str(mission), "-o", str(record), "-q").returncode == 0
     replayed = tmp_path / "replayed.mcap"
-    proc = Live(["replay", str(record), *live_args(replayed, "--wait-viewer", "--speed", "5")])
+    proc = Live(
+        ["replay", str(record), *how, *live_args(replayed, "--wait-viewer", "--speed", "5")]
+    )
     procs.append(proc)
     client = FoxgloveClient(proc.url()).start()
     wait_for_topic(client, "/drone1/behavior_event")  # TAKE_OFF ended

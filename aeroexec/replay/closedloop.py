@@ -212,7 +212,8 @@ def replay_closed(
                 world=world,
             )
         if result.outcome.ending.stopped:
-            notes.append(f"the replayed mission was stopped: {result.outcome.error}")
+            then = f"; then {', '.join(result.assurance)}" if result.assurance else ""
+            notes.append(f"the replayed mission was stopped: {result.outcome.error}{then}")
         elif not result.outcome.returned:
             where = f" at {result.outcome.where}" if result.outcome.where else ""
             notes.append(f"the replayed mission raised{where}: {result.outcome.error}")

@@ -240,8 +240,9 @@ def replay_recording(
     span_ms = max(1, ((run.outcome.end_ns or 0) - (run.outcome.start_ns or 0)) // 1_000_000)
     bar = progress(f"replaying {Path(name).name}", span_ms) if progress else nullcontext(None)
     with bar as advance:
-        watchers: list[BusObserver] = [ReplayedTime(advance, span_ms)] if advance else []
-        watchers.extend(watch.observers)
+        watchers: list[BusObserver] = list(watch.observers)
+        if advance is not None:
+            watchers.insert(0, ReplayedTime(advance, span_ms))
         live = {"tap": watch.tap, "speed": options.speed}
         if mode is Mode.closed:
             mission = load_mission(options.mission) if options.mission is not None else None
