@@ -11,9 +11,11 @@ mavsim` at speed 1 (real time, every telemetry stream at its full rate):
   the SDK sits on). Target: p99 <= 20 ms.
 * **cost**: CPU time of the flight (`fly()` in this process: every thread, the SDKs'
   servers too) with the live view and a client connected, against the same flight
-  without it; with Foxglove and Rerun (what `--live` serves), and with the Foxglove
-  server alone. Target: <= 1.15x. Not in it: importing rerun-sdk and foxglove-sdk
-  (~0.8 s of CPU once per `fly --live`, almost all rerun's).
+  without it: with the Foxglove server (what `--live` serves), with the Rerun stream
+  too (`--live --rerun-port`), and, as the floor, with a bare foxglove-sdk server that
+  only logs each recorded message on its channel (what any server built on the SDK
+  pays). Target: <= 1.15x. Not in it: importing foxglove-sdk and, for the Rerun
+  stream, rerun-sdk (~0.8 s of CPU once per start, almost all rerun's).
 * **parity**: the share of the recording's messages the client received with the same
   topic, log time and bytes. Target: 100 %.
 
@@ -33,6 +35,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tests"))
@@ -182,22 +185,61 @@ def sdk_floor(workdir: Path) -> float:
     return p99([(arrived - sent[t]) / 1e9 for _, t, _, arrived in received])
 
 
+class BareSdk:
+    """The floor: a foxglove-sdk server fed by the recorder's tap with nothing of the live
+    view's own (no held channels, no services, no parameters): a channel per recorded
+    channel, each message logged as written."""
+
+    def __init__(self) -> None:
+        import foxglove
+
+        self._foxglove = foxglove
+        self._context = foxglove.Context()
+        self.server = foxglove.start_server(host="127.0.0.1", port=0, context=self._context)
+        self._channels: dict[int, Any] = {}
+
+    def recording_started(self, metadata: Any, attachments: Any) -> None:
+        return None
+
+    def channel_added(self, channel: Any) -> None:
+        self._channels[channel.id] = self._foxglove.Channel(
+            channel.topic, message_encoding="json", context=self._context
+        )
+
+    def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
+        self._channels[channel_id].log(data, log_time=log_time_ns)
+
+    def recording_closed(self) -> None:
+        return None
+
+
 def cpu_run(workdir: Path, index: int, variant: str) -> tuple[float, float]:
     """CPU seconds of this process (all its threads: the SDKs' servers too) while it
-    flies Appendix C on mavsim in real time: `plain` without a live view, `foxglove`
-    with the Foxglove server only, `both` with the Rerun stream too; a client process
-    connected to the Foxglove server."""
+    flies Appendix C on mavsim in real time: `plain` without a live view, `sdk` with a
+    bare foxglove-sdk server, `foxglove` with the live view's Foxglove server, `both`
+    with the Rerun stream too; a client process connected to the Foxglove server."""
     port = free_udp_port()
     record = workdir / f"cpu{index}{variant}.mcap"
-    view = None
+    view: Any = None
     client = None
-    if variant != "plain":
+    bare = None
+    if variant == "sdk":
+        bare = BareSdk()
+        client = start_client(f"ws://127.0.0.1:{bare.server.port}", workdir / f"cpu{index}.json")
+        deadline = time.monotonic() + 30
+        while not no_delay(bare.server.port):  # connected, as --wait-viewer would wait
+            assert time.monotonic() < deadline, "the client did not connect"
+            time.sleep(0.05)
+    elif variant != "plain":
         rerun = free_tcp_port() if variant == "both" else None
         view = LiveView(LiveOptions(port=0, rerun_port=rerun, wait_viewer=True))
         client = start_client(view.urls[0], workdir / f"cpu{index}.json")
     sim = start_mavsim(port)
     config = FlightConfig(
-        mission=APPENDIX_C, connect=f"udpin:127.0.0.1:{port}", record=record, tap=view
+        mission=APPENDIX_C,
+        connect=f"udpin:127.0.0.1:{port}",
+        record=record,
+        tap=view if bare is None else bare,
     )
     try:
         with contextlib.redirect_stdout(io.StringIO()):
@@ -208,6 +250,9 @@ def cpu_run(workdir: Path, index: int, variant: str) -> tuple[float, float]:
     finally:
         if view is not None:
             view.close()
+        if bare is not None:
+            time.sleep(0.3)
+            bare.server.stop()
         stop(sim)
     if client is not None:
         client.wait(60)
@@ -222,7 +267,12 @@ def main() -> int:
         workdir = Path(tmp)
         floor = statistics.median(sdk_floor(workdir) for _ in range(options.runs))
         runs = [latency_run(workdir, i) for i in range(options.runs)]
-        cpu: dict[str, list[tuple[float, float]]] = {"plain": [], "foxglove": [], "both": []}
+        cpu: dict[str, list[tuple[float, float]]] = {
+            "plain": [],
+            "sdk": [],
+            "foxglove": [],
+            "both": [],
+        }
         for i in range(options.runs):  # interleaved: drift hits all alike
             for variant, samples in cpu.items():
                 samples.append(cpu_run(workdir, i, variant))
@@ -239,15 +289,22 @@ def main() -> int:
             kind="max",
         ),
         Figure(
-            "CPU of a real-time flight, --live (Foxglove and Rerun) and a client",
+            "CPU of a real-time flight, --live (the Foxglove server) and a client",
+            statistics.median(c for c, _ in cpu["foxglove"]),
+            statistics.median(c for c, _ in cpu["plain"]),
+            "without --live",
+            COST_TARGET,
+        ),
+        Figure(
+            "CPU of a real-time flight, --live --rerun-port (Foxglove and Rerun)",
             statistics.median(c for c, _ in cpu["both"]),
             statistics.median(c for c, _ in cpu["plain"]),
             "without --live",
             COST_TARGET,
         ),
         Figure(
-            "CPU of a real-time flight, the Foxglove server alone and a client",
-            statistics.median(c for c, _ in cpu["foxglove"]),
+            "  the same flight with a bare foxglove-sdk server (the floor)",
+            statistics.median(c for c, _ in cpu["sdk"]),
             statistics.median(c for c, _ in cpu["plain"]),
             "without --live",
             COST_TARGET,
@@ -257,7 +314,7 @@ def main() -> int:
             100
             * statistics.median(
                 (live - plain) / wall
-                for (live, wall), (plain, _) in zip(cpu["both"], cpu["plain"], strict=True)
+                for (live, wall), (plain, _) in zip(cpu["foxglove"], cpu["plain"], strict=True)
             ),
             100 * statistics.median(c / w for c, w in cpu["plain"]),
             "the flight's own",

@@ -66,17 +66,19 @@ def test_a_bug_met_on_one_recording_is_its_error_result(
     real = tasks.replay_file
     victim = corpus.files[1]
 
-    def replay_file(path: str, options: ReplayOptions, progress: None = None) -> ReplayResult:
+    def replay_file(
+        path: str, options: ReplayOptions, progress: None = None, watch: None = None
+    ) -> ReplayResult:
         if path == victim:
             return {}["no such key"]  # what a bug in replay looks like from here
-        return real(path, options, progress)
+        return real(path, options, progress, watch)
 
     monkeypatch.setattr(tasks, "replay_file", replay_file)
     results = replay_many(corpus.files[:3], ReplayOptions(mode=Mode.open))
     assert [r.error is None for r in results] == [True, False, True]
     assert results[1].error == (
         f"replay failed: KeyError: 'no such key' at {Path(__file__).name}:"
-        f"{replay_file.__code__.co_firstlineno + 2} (please report this, with the file)"
+        f"{replay_file.__code__.co_firstlineno + 4} (please report this, with the file)"
     )
 
 

@@ -204,6 +204,8 @@ def test_the_abort_service_lands_the_vehicle_and_parameters_are_read_only(
     assert "vehicle landed" in out
     recording = open_recording(record)
     assert recording.complete
+    # recorded as what it was: an operator's abort, not a violated property
+    assert recording.metadata["aeroexec_end"]["reason"] == "abort"
     assert recording.metadata["aeroexec_end"]["detail"] == "aborted by a live viewer"
     assert_parity(client, record)
     # the ending is recorded: the behaviors inhibited, then a landing
@@ -257,19 +259,42 @@ def test_a_signal_ends_the_wait_for_a_viewer(tmp_path: Path, procs: list[Aeroexe
     assert recording.metadata["aeroexec_end"]["reason"] == "interrupted"
 
 
-def test_the_servers_listen_on_loopback_only(tmp_path: Path, procs: list[AeroexecProcess]) -> None:
+def listening(proc: AeroexecProcess) -> list[Any]:
     psutil = pytest.importorskip("psutil")
-    proc = Live(["run", str(write_mission(tmp_path, PATROL)), "--live", "--port", "0"])
-    procs.append(proc)
-    proc.url()
-    proc.rerun_url()
-    listening = [
+    return [
         c.laddr
         for c in psutil.Process(proc.popen.pid).net_connections(kind="tcp")
         if c.status == psutil.CONN_LISTEN
     ]
-    assert len(listening) == 2
-    assert {address.ip for address in listening} == {"127.0.0.1"}
+
+
+def test_the_servers_listen_on_loopback_only(tmp_path: Path, procs: list[AeroexecProcess]) -> None:
+    mission = str(write_mission(tmp_path, PATROL))
+    proc = Live(["run", mission, "--live", "--port", "0", "--rerun-port", "0"])
+    procs.append(proc)
+    proc.url()
+    proc.rerun_url()
+    addresses = listening(proc)
+    assert len(addresses) == 2
+    assert {address.ip for address in addresses} == {"127.0.0.1"}
+    proc.stop()
+
+
+def test_the_rerun_stream_runs_only_when_asked_for(
+    tmp_path: Path, procs: list[AeroexecProcess]
+) -> None:
+    """Without --rerun-port, --live serves Foxglove alone: one server, no Rerun line, and
+    rerun-sdk is not even imported (its import and its stream are most of --live's CPU)."""
+    proc = Live(["run", str(write_mission(tmp_path, PATROL)), "--live", "--port", "0"])
+    procs.append(proc)
+    url = proc.wait_for("live: Foxglove, Lichtblick: ").split(": ")[-1].strip()
+    port = int(url.rsplit(":", 1)[1])
+    proc.wait_for("start    TAKE_OFF")
+    assert [(a.ip, a.port) for a in listening(proc)] == [("127.0.0.1", port)]
+    assert not any(line.startswith("live: Rerun") for line in proc.out)
+    maps = Path(f"/proc/{proc.popen.pid}/maps")
+    if maps.exists():  # Linux: rerun-sdk's native library is not loaded
+        assert "rerun_bindings" not in maps.read_text()
     proc.stop()
 
 

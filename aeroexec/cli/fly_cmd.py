@@ -213,8 +213,9 @@ def fly_command(
           --connect-timeout 60
 
     With --live the flight is served as it happens (Foxglove, Lichtblick:
-    ws://127.0.0.1:8765; Rerun: rerun rerun+http://127.0.0.1:9876/proxy); a viewer may
-    call /abort_mission, and the flight ends as --on-exit says.
+    ws://127.0.0.1:8765; with --rerun-port 9876, Rerun too: rerun
+    rerun+http://127.0.0.1:9876/proxy); a viewer may call /abort_mission, and the flight
+    ends as --on-exit says.
 
     However it ends, the vehicle is never left flying by surprise: see --on-exit,
     --failsafe and --link-timeout. Exit code 0 when the mission returned and the vehicle

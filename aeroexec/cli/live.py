@@ -1,11 +1,14 @@
-"""`--live` on `run` and `fly`: the options, and the live view around the session.
+"""`--live` on `run`, `fly` and `replay`: the options, and the live view around the
+session.
 
-The servers (aeroexec/viz/live.py) import foxglove-sdk and rerun: they are imported only
-when `--live` is given, so `run` and `fly` start as fast as before without it.
+The servers (aeroexec/viz/live.py) import foxglove-sdk (and rerun-sdk for the Rerun
+stream): they are imported only when `--live` is given (and `--rerun-port`), so the
+commands start as fast as before without it.
 """
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -28,8 +31,9 @@ LiveOption = Annotated[
     typer.Option(
         "--live",
         help="Serve the session as it happens: a Foxglove WebSocket server (Foxglove, "
-        "Lichtblick) and a Rerun gRPC stream, on this machine only (127.0.0.1) unless "
-        "--allow-remote. They carry what is recorded, and close when the command ends.",
+        "Lichtblick) and, with --rerun-port, a Rerun gRPC stream, on this machine only "
+        "(127.0.0.1) unless --allow-remote. They carry what is recorded, and close when "
+        "the command ends.",
     ),
 ]
 PortOption = Annotated[
@@ -51,7 +55,9 @@ RerunPortOption = Annotated[
         metavar="PORT",
         min=0,
         max=65535,
-        help=f"With --live: the Rerun gRPC server's port (default {RERUN_PORT}; 0: any free port).",
+        help=f"With --live: stream to Rerun too, from a gRPC server on this port (Rerun's "
+        f"usual one is {RERUN_PORT}; 0: any free port). Only when asked for: it costs "
+        "most of the live view's CPU.",
         show_default=False,
     ),
 ]
@@ -70,6 +76,14 @@ def check_live_options(
 ) -> None:
     if not live and (port is not None or rerun_port is not None or wait_viewer):
         raise AeroexecError("--port, --rerun-port and --wait-viewer are for --live: add --live")
+
+
+def live_speed(speed: float | None, live: bool) -> float | None:
+    """The pacing `--speed` asks for, checked: with --live real time (1) unless given;
+    without, as fast as it computes (None) unless given."""
+    if speed is not None and not (speed > 0 and math.isfinite(speed)):
+        raise AeroexecError(f"invalid value for --speed: {speed:g}: give a factor above 0")
+    return speed if speed is not None or not live else 1.0
 
 
 @contextmanager
@@ -94,7 +108,7 @@ def live_view(
     options = LiveOptions(
         host=loopback_or(allow_remote),
         port=FOXGLOVE_PORT if port is None else port,
-        rerun_port=RERUN_PORT if rerun_port is None else rerun_port,
+        rerun_port=rerun_port,
         wait_viewer=wait_viewer,
         abort_action=abort_action,
     )

@@ -15,7 +15,17 @@ import typer
 
 from aeroexec.catalog.loader import load_catalog
 from aeroexec.cli.app import app, error_line, guarded
+from aeroexec.cli.live import (
+    LiveOption,
+    PortOption,
+    RerunPortOption,
+    WaitViewerOption,
+    check_live_options,
+    live_speed,
+    live_view,
+)
 from aeroexec.cli.options import (
+    allow_remote_option,
     apply_timeout,
     catalog_option,
     choices,
@@ -49,7 +59,7 @@ from aeroexec.inputs import is_regular_file
 from aeroexec.mission.script import load_mission
 from aeroexec.progress import ProgressFactory, progress_bar
 from aeroexec.replay.diff import Tolerance
-from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, output_for
+from aeroexec.replay.engine import Mode, ReplayOptions, ReplayResult, SessionWatch, output_for
 from aeroexec.replay.executors import LOCAL, InlineExecutor, executor_for, replay_many
 from aeroexec.replay.inject import Injection, parse_injection
 from aeroexec.replay.inputs import expand_inputs
@@ -62,6 +72,7 @@ if TYPE_CHECKING:
     from rich.progress import Progress
 
     from aeroexec.properties.spec import PropertySet
+    from aeroexec.viz.live import LiveView
 
 #: One recording at least this big gets bars for its read and replay (~2 s of work: a
 #: 10-minute simulated patrol is ~1 MB and replays in ~0.4 s).
@@ -149,6 +160,27 @@ def _progress(total: int) -> Progress | None:
     from rich.progress import Progress
 
     return Progress(console=Console(stderr=True), transient=True)
+
+
+def _live(watching: _Watching | None, output: str | None) -> Any:
+    """The live view around the replay (`--live`), or nothing."""
+    if watching is None:
+        return contextlib.nullcontext(None)
+    return live_view(
+        watching.live,
+        port=watching.port,
+        rerun_port=watching.rerun_port,
+        wait_viewer=watching.wait_viewer,
+        allow_remote=watching.allow_remote,
+        abort_action="land",
+        output=Path(output) if output is not None else None,
+    )
+
+
+def _watch(view: LiveView | None) -> SessionWatch | None:
+    """What watches the replay: the live view, as the recording's tap and the session's
+    observer (its abort, its wait for a viewer)."""
+    return SessionWatch(tap=view, observers=(view,)) if view is not None else None
 
 
 @app.command("replay")
@@ -248,6 +280,24 @@ def replay(
             "is checked against --spec and aeroexec:safety (docs/whatif.md).",
         ),
     ] = None,
+    live: LiveOption = False,
+    port: PortOption = None,
+    rerun_port: RerunPortOption = None,
+    wait_viewer: WaitViewerOption = False,
+    speed: Annotated[
+        float | None,
+        typer.Option(
+            "--speed",
+            metavar="FACTOR",
+            help="Keep the replay's clock to the wall clock, FACTOR times as fast (default "
+            "with --live: 1, the recording's own pace; without: as fast as it computes). "
+            "The replay and its recording are the same at any speed.",
+            show_default=False,
+        ),
+    ] = None,
+    allow_remote: bool = allow_remote_option(
+        "With --live: serve on every network interface, not only this machine (127.0.0.1)."
+    ),
 ) -> None:
     """Replay recorded missions against a new catalog or code version and report, per
     mission command, what changed: accepted/rejected, preemptions, capabilities and
@@ -280,6 +330,16 @@ def replay(
     --check fails it only for a violated property (docs/whatif.md):
       aeroexec replay flight.mcap --trust-recording --inject lost_link@end:TAKE_OFF --check
 
+    With --live, one replay is served as it runs, paced to the recording's time
+    (--speed), as `run --live` serves a run: a Foxglove WebSocket server (Foxglove,
+    Lichtblick: ws://127.0.0.1:8765) and, with --rerun-port 9876, a Rerun gRPC stream
+    (rerun rerun+http://127.0.0.1:9876/proxy) carry the replay's own recording; a viewer may
+    call /abort_mission to stop it (docs/view.md). One recording, replayed here (not
+    with -j or --executor ray): a viewer shows one session at a time.
+
+    \b
+      aeroexec replay flight.mcap --catalog new.yaml --live --wait-viewer
+
     Exit codes: 0 replayed (with --check: no differences); 1 with --check, some replay
     differs or violates a property; 2 an input could not be read (one line on stderr each).
     """
@@ -302,6 +362,17 @@ def replay(
     if injections:
         spec = with_safety(spec)
     properties = load_spec(spec)  # so is a bad property file
+    speed = live_speed(speed, live)
+    check_live_options(live, port, rerun_port, wait_viewer)
+    if allow_remote and not live:
+        raise AeroexecError("--allow-remote is for --live: add --live")
+    if live and (jobs > 1 or executor != LOCAL):
+        # A live view is one session, served from this process.
+        given = f"-j {jobs}" if jobs > 1 else f"--executor {executor}"
+        raise AeroexecError(
+            f"--live serves one replay as it runs here, in this process: not with {given}"
+        )
+    watching = _Watching(live, port, rerun_port, wait_viewer, allow_remote)
     _replay(
         _Run(
             recordings=recordings,
@@ -323,6 +394,8 @@ def replay(
             started=started,
             properties=properties,
             injections=injections,
+            speed=speed,
+            watching=watching,
         )
     )
 
@@ -350,6 +423,19 @@ class _Run:
     started: float
     properties: PropertySet | None
     injections: tuple[Injection, ...] = ()
+    speed: float | None = None
+    watching: _Watching | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class _Watching:
+    """`--live` and its options, checked."""
+
+    live: bool
+    port: int | None
+    rerun_port: int | None
+    wait_viewer: bool
+    allow_remote: bool
 
 
 def _replay(run: _Run) -> None:
@@ -388,6 +474,7 @@ def _replay(run: _Run) -> None:
         # Checked where each replay runs (a scratch file there when it has no output).
         properties=properties.documents if properties is not None else (),
         injections=run.injections,
+        speed=run.speed,
     )
     inputs = expand_inputs(recordings)
     part = None
@@ -395,6 +482,13 @@ def _replay(run: _Run) -> None:
         part = slice_for([i.path for i in inputs], parse_shard(shard), settings_of(options))
         inputs = [inputs[p] for p in part.positions]
     paths = [i.path for i in inputs if i.error is None]
+    watching = run.watching
+    if watching is not None and watching.live and len(inputs) != 1:
+        # Each replay is a session of its own, from time 0 on the same topics: one
+        # viewer's timeline cannot hold two.
+        raise AeroexecError(
+            f"--live serves one replay as it runs: give one recording ({len(inputs)} given)"
+        )
     _check_outputs(paths, output, out_dir)
     if executor.startswith("ray://") and (output is not None or out_dir is not None):
         raise AeroexecError(
@@ -404,8 +498,9 @@ def _replay(run: _Run) -> None:
     # unsafe). Until the report, stdout is stderr: Ray prints its workers' deaths to stdout.
     one_big = _one_big_replay(paths, executor)
     with (
-        InlineExecutor(one_big)
-        if one_big is not None or not paths
+        _live(watching, output) as view,
+        InlineExecutor(one_big, _watch(view))
+        if one_big is not None or not paths or view is not None
         else executor_for(executor, jobs, len(paths)) as where,
         contextlib.redirect_stdout(sys.stderr),
     ):

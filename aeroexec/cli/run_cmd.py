@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,6 +17,7 @@ from aeroexec.cli.live import (
     PortOption,
     RerunPortOption,
     WaitViewerOption,
+    live_speed,
     live_view,
 )
 from aeroexec.cli.options import (
@@ -187,8 +187,9 @@ def run(
         aeroexec run missions/appendix_c.py -o flight.mcap --live --wait-viewer
 
     With --live the session is served as it happens (Foxglove, Lichtblick: connect to
-    ws://127.0.0.1:8765; Rerun: rerun rerun+http://127.0.0.1:9876/proxy), at real time
-    unless --speed; a viewer may call the service /abort_mission, and the vehicle lands.
+    ws://127.0.0.1:8765; with --rerun-port 9876, Rerun too: rerun
+    rerun+http://127.0.0.1:9876/proxy), at real time unless --speed; a viewer may call
+    the service /abort_mission, and the vehicle lands.
 
     Behaviors come from -b/--behaviors, the project's [tool.aeroexec] table (nearest
     pyproject.toml or aeroexec.toml), installed 'aeroexec.behaviors' entry points and the
@@ -203,8 +204,7 @@ def run(
     """
     apply_timeout(timeout)
     output = replaced(output, record, new_name="-o/--output", old_name="-r/--record")
-    if speed is not None and not (speed > 0 and math.isfinite(speed)):
-        raise AeroexecError(f"invalid value for --speed: {speed:g}: give a factor above 0")
+    speed = live_speed(speed, live)
     if allow_remote and not live:
         raise AeroexecError("--allow-remote is for --live: add --live")
     settings = project()
@@ -233,7 +233,7 @@ def run(
             color,
             settings,
             view,
-            speed if speed is not None or not live else 1.0,
+            speed,
         )
 
 
@@ -306,7 +306,7 @@ def report_outcome(result: SessionResult, debug: bool, vehicle: bool) -> bool:
             error_line(f"{where}mission stopped: {outcome.error} (--max-sim-time)")
         elif outcome.ending is Ending.TIMEOUT:
             error_line(f"{where}mission stopped: {outcome.error}")
-        elif outcome.ending is Ending.STOPPED:
+        elif outcome.ending.stopped:
             done = "; ".join(getattr(result, "assurance", ()) or ())
             error_line(f"mission stopped: {outcome.error}" + (f" ({done})" if done else ""))
         else:

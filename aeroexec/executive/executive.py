@@ -51,13 +51,15 @@ class TimeLimitReached(BaseException):
 
 class StopRequested(BaseException):
     """An observer asked the session to end (`Executive.request_stop`): a property
-    monitor whose property was violated, with the action that ends the flight.
+    monitor whose property was violated (`by` "property"), an operator's abort (`by`
+    "abort": a live viewer's), with the action that ends the flight.
 
     A `BaseException` for the reason `TimeLimitReached` is one."""
 
-    def __init__(self, reason: str, action: str) -> None:
+    def __init__(self, reason: str, action: str, by: str = "property") -> None:
         self.reason = reason
         self.action = action
+        self.by = by
         super().__init__(reason)
 
 
@@ -120,9 +122,9 @@ class Executive:
         #: The clock time at which `step()` refuses to go on (`TimeLimitReached`): a
         #: mission that never ends must not run forever. None: no limit.
         self.time_limit_ns: int | None = None
-        #: (reason, action) once an observer asked the session to end; the next tick
+        #: (reason, action, by) once an observer asked the session to end; the next tick
         #: boundary raises `StopRequested` (never inside a publish or a record).
-        self.stop_request: tuple[str, str] | None = None
+        self.stop_request: tuple[str, str, str] | None = None
         self._feed_beliefs()
         self.initiation = self.bus.call(
             "initiate_behaviors",
@@ -139,10 +141,11 @@ class Executive:
     def inhibit_behavior(self, name: str, caller: str = "mission") -> ServiceResult:
         return self.coordinator.inhibit_behavior(name, caller)
 
-    def request_stop(self, reason: str, action: str) -> None:
-        """End the session at the next tick boundary (the first request wins)."""
+    def request_stop(self, reason: str, action: str, by: str = "property") -> None:
+        """End the session at the next tick boundary (the first request wins). `by`:
+        who asked, as the recording says why the session ended ("property", "abort")."""
         if self.stop_request is None:
-            self.stop_request = (reason, action)
+            self.stop_request = (reason, action, by)
 
     # -- state ---------------------------------------------------------------------------
     @property

@@ -35,7 +35,6 @@ from aeroexec.interrupts import Interrupted
 from aeroexec.mission.activity import Activation
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.ending import ON_EXIT, Ending, OnExit, end_flight
-from aeroexec.mission.script import Ending as ScriptEnding
 from aeroexec.mission.script import MissionOutcome, MissionScript, load_mission, run_script
 from aeroexec.mission.session import (
     SessionResult,
@@ -262,7 +261,15 @@ def fly(
             # A mission that never lets go of a signal is not ended by exiting: the
             # vehicle must get its ending (it is raised again at every safe point).
             outcome = run_script(script, api, forced_exit=False)
-            how = "returned" if outcome.returned else "raised"
+            # A mission stopped from outside says by whom ("property", "abort"): a
+            # replay stops it at the same tick, as for a signal.
+            how = (
+                outcome.ending.value
+                if outcome.ending.stopped
+                else "returned"
+                if outcome.returned
+                else "raised"
+            )
         except LinkTimeout as exc:
             outcome = MissionOutcome(
                 False, None, f"stopped: the link was lost for {exc.silent_s:.1f} s"
@@ -273,14 +280,14 @@ def fly(
             # vehicle gets its ending before the exception goes on.
             stopped = exc
             how = exc.name if isinstance(exc, Interrupted) else type(exc).__name__
-        mission_over(observers, executive, outcome.ending is ScriptEnding.STOPPED)
+        mission_over(observers, executive, outcome.ending.stopped)
         # When and how the mission ended: replay stops a mission stopped here at the
         # same tick, and tells the ending's commands from the mission's.
         executive.bus.publish(
             "mavlink/link", {"event": "mission_end", "url": vehicle.endpoint.url, "how": how}
         )
         on_exit = config.on_exit
-        if outcome.ending is ScriptEnding.STOPPED and executive.stop_request is not None:
+        if outcome.ending.stopped and executive.stop_request is not None:
             # A violated property's action (`fly --spec`) decides how the flight ends.
             action = executive.stop_request[1]
             executive.stop_request = None  # honoured: the ending steps on

@@ -48,6 +48,13 @@ class Ending(str, Enum):
     TIME_LIMIT = "max_sim_time"
     TIMEOUT = "timeout"  # ran past its wall-clock limit (--timeout)
     STOPPED = "property"  # a violated property's action ended it (`--spec`)
+    ABORTED = "abort"  # an operator aborted it (a live viewer's /abort_mission)
+
+    @property
+    def stopped(self) -> bool:
+        """Stopped from outside at a tick boundary (`StopRequested`): the session's
+        ending (its `action`) follows."""
+        return self in (Ending.STOPPED, Ending.ABORTED)
 
 
 @dataclass(frozen=True, slots=True)
@@ -176,8 +183,9 @@ def _run(
             False, None, str(exc), traceback.format_exc(), Ending.TIMEOUT, _where(exc, script)
         )
     except StopRequested as exc:
+        ending = Ending.ABORTED if exc.by == Ending.ABORTED.value else Ending.STOPPED
         return MissionOutcome(
-            False, None, exc.reason, traceback.format_exc(), Ending.STOPPED, _where(exc, script)
+            False, None, exc.reason, traceback.format_exc(), ending, _where(exc, script)
         )
     except SystemExit as exc:
         where = _where(exc, script)

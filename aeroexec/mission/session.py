@@ -28,7 +28,6 @@ from aeroexec.mission.activity import Activation, ActivityLog
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.assurance import carry_out
 from aeroexec.mission.script import (
-    Ending,
     MissionOutcome,
     MissionScript,
     load_mission,
@@ -294,9 +293,9 @@ def simulate(
         start_observing(observers, executive)
         api = MissionAPI(executive)
         outcome = run_script(script, api)
-        mission_over(observers, executive, outcome.ending is Ending.STOPPED)
+        mission_over(observers, executive, outcome.ending.stopped)
         assurance: list[str] = []
-        if outcome.ending is Ending.STOPPED and executive.stop_request is not None:
+        if outcome.ending.stopped and executive.stop_request is not None:
             start = vehicle.world.start
             assurance = carry_out(
                 executive, api, vehicle, executive.stop_request[1], (start[0], start[1])

@@ -26,12 +26,16 @@ from pathlib import Path
 from aeroexec import __version__
 from aeroexec.catalog.model import Catalog
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import SimClock
-from aeroexec.executive.executive import Executive
+from aeroexec.executive.clock import SimClock, paced
+from aeroexec.executive.executive import Executive, StopRequested
+from aeroexec.mission.api import MissionAPI
+from aeroexec.mission.assurance import carry_out
 from aeroexec.mission.script import MissionScript, compile_mission
 from aeroexec.mission.session import (
     SessionConfig,
+    end_observing,
     end_recording,
+    mission_over,
     placed,
     recorded_start,
     recording_session,
@@ -40,9 +44,11 @@ from aeroexec.mission.session import (
     simulate,
     stand_in_metadata,
     start_metadata,
+    start_observing,
 )
 from aeroexec.plugins.discovery import BehaviorSet
 from aeroexec.recording.reader import attachment_place
+from aeroexec.recording.tap import RecordTap
 from aeroexec.replay.collect import OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -62,11 +68,14 @@ class ChosenCatalog:
 
 @dataclass(frozen=True, slots=True)
 class _Injected:
-    """Failures a replay strikes besides the world's own, and their metadata record."""
+    """Failures a replay strikes besides the world's own, and their metadata record;
+    where the vehicle starts; the live view's tap and pacing."""
 
     faults: tuple[ScheduledFailure, ...]
     metadata: dict[str, str]
     start: tuple[float, float, float] | None = None
+    tap: RecordTap | None = None
+    speed: float | None = None
 
 
 class _Discard(io.TextIOBase):
@@ -147,6 +156,8 @@ def replay_closed(
     faults: tuple[ScheduledFailure, ...] = (),
     faults_metadata: Mapping[str, str] | None = None,
     start: tuple[float, float, float] | None = None,
+    tap: RecordTap | None = None,
+    speed: float | None = None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` in the simulator with `behaviors` (complete for the catalog, stand-ins
     included); the replay's outcome and notes about how.
@@ -156,7 +167,9 @@ def replay_closed(
     and no code from the recording runs. `watchers` observe the replay's bus too (its
     progress). `faults` strike besides the world's own (`--inject`), and
     `faults_metadata` records them. `start` (x, y, yaw degrees): where the vehicle
-    starts instead of the world's start (a flight's twin; a recording that says so)."""
+    starts instead of the world's start (a flight's twin; a recording that says so).
+    `tap` sees the replay's recording as it is written (a live view), and `speed` keeps
+    its clock to the wall clock (`ReplayOptions.speed`), as `run --live` does."""
     notes: list[str] = []
     metadata = run.metadata
     seed = _seed(metadata, notes)
@@ -166,10 +179,12 @@ def replay_closed(
     observer = OutcomeObserver(builder)
     script = script_to_run(run, mission, trust_recording, notes)
     start = start if start is not None else recorded_start(metadata)
-    injected = _Injected(faults, dict(faults_metadata or {}), start)
+    injected = _Injected(faults, dict(faults_metadata or {}), start, tap, speed)
     if script is None:
-        _replay_commands(
-            run, catalog, behaviors, output, world, seed, drone, observer, watchers, injected
+        notes.extend(
+            _replay_commands(
+                run, catalog, behaviors, output, world, seed, drone, observer, watchers, injected
+            )
         )
     else:
         world_name = world[1]
@@ -184,6 +199,8 @@ def replay_closed(
             injected=injected.faults,
             injected_metadata=injected.metadata,
             start=start,
+            tap=tap,
+            speed=speed,
         )
         with mission_prints_discarded():
             result = simulate(
@@ -194,7 +211,10 @@ def replay_closed(
                 catalog_text=catalog.text,
                 world=world,
             )
-        if not result.outcome.returned:
+        if result.outcome.ending.stopped:
+            then = f"; then {', '.join(result.assurance)}" if result.assurance else ""
+            notes.append(f"the replayed mission was stopped: {result.outcome.error}{then}")
+        elif not result.outcome.returned:
             where = f" at {result.outcome.where}" if result.outcome.where else ""
             notes.append(f"the replayed mission raised{where}: {result.outcome.error}")
     outcome = builder.outcome(f"{run.outcome.source} (replay)", metadata=dict(metadata))
@@ -212,7 +232,8 @@ def _replay_commands(
     observer: OutcomeObserver,
     watchers: Sequence[BusObserver],
     injected: _Injected,
-) -> None:
+) -> list[str]:
+    """Replay the recorded command stream in the simulator; notes about how."""
     world_model = with_failures(parse_world(*world), injected.faults)
     vehicle = SimVehicle(placed(world_model, injected.start), seed=seed)
     # The simulation starts when the recording does (a live log's clock need not be 0).
@@ -244,18 +265,39 @@ def _replay_commands(
         code.records,
         vehicle.world,
         vehicle.state(),
+        injected.tap,
     )
+    notes: list[str] = []
     with recording_session(recorder, vehicle):
         executive = Executive(
             catalog.catalog,
             vehicle=vehicle,
-            clock=SimClock(),
+            clock=paced(SimClock(), injected.speed),
             library=code.library,
             observers=observers,
             drone=drone,
         )
+        start_observing(watchers, executive)
         player = CommandPlayer(executive, offset_ns=offset, wait_for_execute=True)
-        player.play(run.outcome.commands, until_ns=run.outcome.end_ns)
+        stop = player.play(run.outcome.commands, until_ns=run.outcome.end_ns)
+        mission_over(watchers, executive, stop is not None)
+        ending, detail = "returned", "the recorded commands were replayed"
+        if stop is not None:
+            # As `run` ends a stopped mission: the action (a landing) in the simulator.
+            home = vehicle.world.start
+            done = carry_out(executive, MissionAPI(executive), vehicle, stop.action, home[:2])
+            ending, detail = stop.by, stop.reason
+            notes.append(stopped_note(stop, executive.now_s, done))
+        end_observing(watchers, executive)
         if recorder is not None:
-            reason = "the recorded commands were replayed"
-            end_recording(recorder, "returned", reason, vehicle.state().fault)
+            end_recording(recorder, ending, detail, vehicle.state().fault)
+    return notes
+
+
+def stopped_note(stop: StopRequested, at_s: float, done: Sequence[str] = ()) -> str:
+    """What a report says of a replay an observer stopped (a live viewer's abort)."""
+    then = f"; then {', '.join(done)}" if done else ""
+    return (
+        f"stopped at {at_s:.1f} s ({stop.reason}): the recorded commands after it were not "
+        f"replayed{then}"
+    )

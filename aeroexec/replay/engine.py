@@ -34,12 +34,14 @@ from aeroexec.errors import (
     RecordingError,
     one_line,
 )
+from aeroexec.executive.bus import BusObserver
 from aeroexec.mission.script import load_mission
 from aeroexec.plugins.discovery import BehaviorSet, BehaviorSources, discovered, standard_set
 from aeroexec.plugins.manifest import CodeEntry, code_changes, code_manifest
 from aeroexec.progress import ProgressFactory
 from aeroexec.properties.check import VIOLATED
 from aeroexec.recording.reader import attachment_place
+from aeroexec.recording.tap import RecordTap
 from aeroexec.recording.transitions import read_timeline
 from aeroexec.replay.closedloop import ChosenCatalog, replay_closed
 from aeroexec.replay.collect import RecordedRun, read_run
@@ -88,6 +90,23 @@ class ReplayOptions:
     #: text of each property file (`PropertySet.documents`), so that a worker anywhere
     #: loads the same set; the verdicts come back on `ReplayResult.properties`.
     properties: tuple[tuple[str, str], ...] = ()
+    #: Keep the replay's clock to the wall clock, this many times as fast (`--speed`;
+    #: None: as fast as it computes). Pacing only waits between ticks: the replay and
+    #: its recording are the same at any speed.
+    speed: float | None = None
+
+
+@dataclass(frozen=True)
+class SessionWatch:
+    """Who watches a replay as it runs, here in this process (a live view: `replay
+    --live`): `tap` sees the replay's recording as it is written (recorded to no file
+    without `output`), `observers` observe its session (bus messages, and
+    `session_started(executive)` and the other session hooks of
+    `aeroexec.mission.session`: a viewer's abort stops the replay at a tick, and the
+    session ends as `run`'s would). Not data: never sent to a worker process."""
+
+    tap: RecordTap | None = None
+    observers: tuple[BusObserver, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -182,12 +201,15 @@ def replay_recording(
     path: str | os.PathLike[str],
     options: ReplayOptions,
     progress: ProgressFactory | None = None,
+    watch: SessionWatch | None = None,
 ) -> ReplayResult:
     """Replay one recording and diff it against the original. Input problems raise
     `AeroexecError` (unreadable, not MCAP, no mission commands, bad catalog). `progress`
-    is told how far the read of the recording is, then the replay (`replay.progress`)."""
+    is told how far the read of the recording is, then the replay (`replay.progress`);
+    `watch` watches the replay as it runs (a live view)."""
     if is_bag(path):  # a ROS 1 bag: replayed through a temporary import (aeroexec.bags)
-        return replay_bag(path, options)
+        return replay_bag(path, options, watch)
+    watch = watch if watch is not None else SessionWatch()
     name = str(path)
     run = read_run(path, progress=progress)
     notes: list[str] = []
@@ -218,7 +240,10 @@ def replay_recording(
     span_ms = max(1, ((run.outcome.end_ns or 0) - (run.outcome.start_ns or 0)) // 1_000_000)
     bar = progress(f"replaying {Path(name).name}", span_ms) if progress else nullcontext(None)
     with bar as advance:
-        watchers = [ReplayedTime(advance, span_ms)] if advance is not None else []
+        watchers: list[BusObserver] = list(watch.observers)
+        if advance is not None:
+            watchers.insert(0, ReplayedTime(advance, span_ms))
+        live = {"tap": watch.tap, "speed": options.speed}
         if mode is Mode.closed:
             mission = load_mission(options.mission) if options.mission is not None else None
             # A live flight cannot be flown again: its recorded vehicle stands in for it,
@@ -238,14 +263,16 @@ def replay_recording(
                 mission=mission,
                 trust_recording=options.trust_recording,
                 watchers=watchers,
+                **live,
                 **(_fault_arguments(injected) if injected else {}),
             )
         else:
             replayed, how = replay_open(
-                path, run, catalog, behaviors, options.output, horizon, watchers
+                path, run, catalog, behaviors, options.output, horizon, watchers, **live
             )
         for watcher in watchers:
-            watcher.finish()
+            if isinstance(watcher, ReplayedTime):
+                watcher.finish()
     notes.extend(how)
     notes.extend(_never_struck(injected, replayed))
     changed = code_changes(run.code, code_manifest(behaviors, catalog.catalog).metadata())
@@ -365,7 +392,9 @@ def _renamed(exc: AeroexecError, temp: Path, bag: str) -> AeroexecError:
     return type(exc)(exc.message, mark)
 
 
-def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayResult:
+def replay_bag(
+    path: str | os.PathLike[str], options: ReplayOptions, watch: SessionWatch | None = None
+) -> ReplayResult:
     """`replay_recording` for a bag (imported with the shipped mapping: Aerostack's for a
     ROS 1 bag, Aerostack2's for a ROS 2 one). An Aerostack2 flight has no catalog of its
     own: the replay runs its behavior timeline (the reconstructed activations, with the
@@ -385,7 +414,7 @@ def replay_bag(path: str | os.PathLike[str], options: ReplayOptions) -> ReplayRe
                 Mark(str(path)),
             )
         try:
-            result = replay_recording(imported.path, options)
+            result = replay_recording(imported.path, options, watch=watch)
         except AeroexecError as exc:
             raise _renamed(exc, imported.path, str(path)) from None
     notes = [f"imported from the bag: {note}" for note in imported.report.notes]
@@ -435,13 +464,16 @@ def _commands(count: int) -> str:
 
 
 def replay_file(
-    path: str, options: ReplayOptions, progress: ProgressFactory | None = None
+    path: str,
+    options: ReplayOptions,
+    progress: ProgressFactory | None = None,
+    watch: SessionWatch | None = None,
 ) -> ReplayResult:
     """`replay_recording`, with input problems as a result (for batches and workers),
     and the time it took."""
     started = time.perf_counter()
     try:
-        result = replay_recording(path, options, progress)
+        result = replay_recording(path, options, progress, watch)
     except AeroexecError as exc:
         result = ReplayResult(recording=path, error=_problem(path, exc), mode=_mode_name(options))
     return replace(result, seconds=time.perf_counter() - started)

@@ -43,9 +43,10 @@ from typing import Any, Protocol
 from aeroexec import interrupts
 from aeroexec.errors import AeroexecError
 from aeroexec.progress import ProgressFactory
-from aeroexec.replay.engine import ReplayOptions, ReplayResult
+from aeroexec.replay.engine import ReplayOptions, ReplayResult, SessionWatch
 from aeroexec.replay.tasks import (
     Completed,
+    ReplayTask,
     Task,
     batch_size,
     make_tasks,
@@ -97,13 +98,18 @@ def usable_cpus() -> int:
 
 class InlineExecutor:
     """One recording after the other, in this process (`--jobs 1`). `progress`: each
-    replay reports how far it is (`replay_recording`), for one big recording's bar."""
+    replay reports how far it is (`replay_recording`), for one big recording's bar.
+    `watch`: who watches the replay as it runs (`replay --live`): one replay's session
+    only, so such an executor runs one task."""
 
     name = LOCAL
     needs_absolute_paths = False
 
-    def __init__(self, progress: ProgressFactory | None = None) -> None:
+    def __init__(
+        self, progress: ProgressFactory | None = None, watch: SessionWatch | None = None
+    ) -> None:
         self.progress = progress
+        self.watch = watch
 
     def __enter__(self) -> InlineExecutor:
         return self
@@ -112,6 +118,14 @@ class InlineExecutor:
         return None
 
     def run(self, tasks: Sequence[Task]) -> Iterator[Completed]:
+        if self.watch is not None:
+            if len(tasks) > 1 or not all(isinstance(t, ReplayTask) for t in tasks):
+                # The command refuses more first (`replay --live`): this is a bug.
+                raise ValueError("a watched replay runs one recording")
+            for task in tasks:
+                assert isinstance(task, ReplayTask)
+                yield Completed(task.index, task.run(self.progress, self.watch))
+            return
         for task in tasks:
             yield Completed(task.index, task.run(self.progress))
 

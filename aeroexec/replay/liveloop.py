@@ -28,13 +28,26 @@ from pathlib import Path
 
 from aeroexec import __version__
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import DEFAULT_TICK_NS
+from aeroexec.executive.clock import DEFAULT_TICK_NS, paced
 from aeroexec.executive.executive import Executive
 from aeroexec.mission.api import MissionAPI
 from aeroexec.mission.script import MissionScript, run_script
-from aeroexec.mission.session import session_code, session_observers, stand_in_metadata
+from aeroexec.mission.session import (
+    end_observing,
+    mission_over,
+    session_code,
+    session_observers,
+    stand_in_metadata,
+    start_observing,
+)
 from aeroexec.plugins.discovery import BehaviorSet
-from aeroexec.replay.closedloop import ChosenCatalog, mission_prints_discarded, script_to_run
+from aeroexec.recording.tap import RecordTap
+from aeroexec.replay.closedloop import (
+    ChosenCatalog,
+    mission_prints_discarded,
+    script_to_run,
+    stopped_note,
+)
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -126,11 +139,16 @@ def replay_live(
     mission: MissionScript | None = None,
     trust_recording: bool = False,
     watchers: Sequence[BusObserver] = (),
+    tap: RecordTap | None = None,
+    speed: float | None = None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay the live flight `run` (read from `path`) closed loop; outcome and notes.
 
     The mission that runs is chosen as for a simulated recording (`script_to_run`): the
-    user's copy, the recorded one only when trusted, else the recorded command stream."""
+    user's copy, the recorded one only when trusted, else the recorded command stream.
+    `watchers` observe the replay's bus and session (a live view: a viewer's abort stops
+    the replay at that tick; the recorded vehicle takes no ending); `tap` sees its
+    recording as it is written, `speed` paces the recorded ticks to the wall clock."""
     notes: list[str] = []
     recorded = run.outcome
     drone = run.metadata.get("drone") or "drone1"
@@ -175,12 +193,13 @@ def replay_live(
         [OutcomeObserver(builder), *watchers],
         code.records,
         start=vehicle.state(),
+        tap=tap,
     )
     try:
         executive = Executive(
             catalog.catalog,
             vehicle=vehicle,
-            clock=clock,
+            clock=paced(clock, speed),
             library=code.library,
             observers=observers,
             drone=drone,
@@ -188,23 +207,32 @@ def replay_live(
         # The state the flight started from, as fly records it: a mission that never
         # stepped (its first command refused at once) ends in it.
         executive.publish_vehicle_state()
+        start_observing(watchers, executive)
+        stop = None
         if script is None:
             # The recorded vehicle moves on the recorded clock: the commands go at their
             # recorded times, not when the previous one ends here.
             player = CommandPlayer(executive)
-            player.play(recorded.commands, until_ns=recorded.end_ns)
+            stop = player.play(recorded.commands, until_ns=recorded.end_ns)
         else:
             with mission_prints_discarded():
                 try:
                     result = run_script(script, MissionAPI(executive))
-                    if not result.returned:
+                    if result.ending.stopped:
+                        notes.append(f"the replayed mission was stopped: {result.error}")
+                    elif not result.returned:
                         notes.append(f"the replayed mission raised: {result.error}")
                 except MissionStopped:
                     how = end[1] if end is not None else ""
                     notes.append(f"stopped where the flight's mission was stopped ({how})")
-            # What the flight's ending did after the mission, at its recorded times.
-            after = [c for c in recorded.commands if end is not None and c.time_ns >= end[0]]
-            CommandPlayer(executive).play(after, until_ns=recorded.end_ns)
+            if executive.stop_request is None:
+                # What the flight's ending did after the mission, at its recorded times.
+                after = [c for c in recorded.commands if end is not None and c.time_ns >= end[0]]
+                CommandPlayer(executive).play(after, until_ns=recorded.end_ns)
+        mission_over(watchers, executive, executive.stop_request is not None)
+        if stop is not None:
+            notes.append(stopped_note(stop, executive.now_s))
+        end_observing(watchers, executive)
     finally:
         ticks.close()
         states.close()

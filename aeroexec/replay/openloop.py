@@ -16,11 +16,19 @@ from pathlib import Path
 
 from aeroexec import __version__
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import SimClock
+from aeroexec.executive.clock import SimClock, paced
 from aeroexec.executive.executive import Executive
-from aeroexec.mission.session import end_recording, recording_session, session_observers
+from aeroexec.mission.session import (
+    end_observing,
+    end_recording,
+    mission_over,
+    recording_session,
+    session_observers,
+    start_observing,
+)
 from aeroexec.plugins.discovery import BehaviorSet
-from aeroexec.replay.closedloop import ChosenCatalog
+from aeroexec.recording.tap import RecordTap
+from aeroexec.replay.closedloop import ChosenCatalog, stopped_note
 from aeroexec.replay.collect import STATE_TOPIC, OutcomeBuilder, OutcomeObserver, RecordedRun
 from aeroexec.replay.outcome import RunOutcome
 from aeroexec.replay.player import CommandPlayer
@@ -37,10 +45,15 @@ def replay_open(
     output: str | Path | None,
     horizon_ns: int | None,
     watchers: Sequence[BusObserver] = (),
+    *,
+    tap: RecordTap | None = None,
+    speed: float | None = None,
 ) -> tuple[RunOutcome, tuple[str, ...]]:
     """Replay `run` (read from `path`) open loop; the replay's outcome and notes.
     `behaviors` answer the situation checks the recording has no answer for; `watchers`
-    observe the replay's bus too (its progress)."""
+    observe the replay's bus and session too (its progress, a live view: a viewer's
+    abort stops the replay at that tick; the recorded vehicle takes no ending); `tap`
+    sees its recording as it is written, `speed` paces its clock to the wall clock."""
     notes: list[str] = []
     recorded = run.outcome
     offset = recorded.start_ns or 0
@@ -68,21 +81,29 @@ def replay_open(
         {"catalog.yaml": catalog.text},
         [OutcomeObserver(builder, offset_ns=offset), *watchers],
         start=vehicle.state(),
+        tap=tap,
     )
     try:
         with recording_session(recorder):
             executive = Executive(
                 catalog.catalog,
                 vehicle=vehicle,
-                clock=clock,
+                clock=paced(clock, speed),
                 library=stand_in_library(catalog.catalog, script, behaviors.library()),
                 observers=observers,
                 drone=drone,
             )
+            start_observing(watchers, executive)
             player = CommandPlayer(executive, offset_ns=offset, arm=script.arm)
-            player.play(recorded.commands, until_ns=recorded.end_ns)
+            stop = player.play(recorded.commands, until_ns=recorded.end_ns)
+            mission_over(watchers, executive, stop is not None)
+            end_observing(watchers, executive)
+            ending, detail = "returned", "the recorded commands were replayed"
+            if stop is not None:
+                ending, detail = stop.by, stop.reason
+                notes.append(stopped_note(stop, executive.now_s))
             if recorder is not None:
-                end_recording(recorder, "returned", "the recorded commands were replayed", "")
+                end_recording(recorder, ending, detail, "")
     finally:
         states.close()
     if offset:

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from aeroexec.executive.beliefs import BeliefSyntaxError
-from aeroexec.executive.executive import Executive
+from aeroexec.executive.executive import Executive, StopRequested
 from aeroexec.executive.messages import BehaviorEvent
 from aeroexec.replay.outcome import ACTIVATIONS, CommandOutcome
 
@@ -64,13 +64,22 @@ class CommandPlayer:
     def _on_event(self, event: BehaviorEvent) -> None:
         self._ended.add(event.uid)
 
-    def play(self, commands: Iterable[CommandOutcome], until_ns: int | None = None) -> None:
-        """Every command at its recorded time, then run on to `until_ns` (recorded time)."""
-        for command in commands:
-            self._advance_to(command.time_ns)
-            self._carry_out(command)
-        if until_ns is not None:
-            self._advance_to(until_ns)
+    def play(
+        self, commands: Iterable[CommandOutcome], until_ns: int | None = None
+    ) -> StopRequested | None:
+        """Every command at its recorded time, then run on to `until_ns` (recorded time).
+        An observer's stop (a live viewer's abort: `Executive.request_stop`) ends the play
+        at that tick, the commands after it unplayed: that stop is returned (the caller
+        ends the session), else None."""
+        try:
+            for command in commands:
+                self._advance_to(command.time_ns)
+                self._carry_out(command)
+            if until_ns is not None:
+                self._advance_to(until_ns)
+        except StopRequested as stop:
+            return stop
+        return None
 
     def _advance_to(self, recorded_ns: int) -> None:
         target = recorded_ns - self.offset_ns

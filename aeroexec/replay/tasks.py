@@ -29,7 +29,13 @@ from aeroexec.progress import ProgressFactory
 from aeroexec.properties.check import check_recording
 from aeroexec.properties.report import recording_json
 from aeroexec.properties.spec import PropertySet, load_property_documents
-from aeroexec.replay.engine import ReplayOptions, ReplayResult, output_for, replay_file
+from aeroexec.replay.engine import (
+    ReplayOptions,
+    ReplayResult,
+    SessionWatch,
+    output_for,
+    replay_file,
+)
 from aeroexec.replay.remote import fetched, is_url
 
 #: At most this many recordings per hand-over to a worker, and at least this many
@@ -83,8 +89,10 @@ class ReplayTask:
     location: str
     options: ReplayOptions
 
-    def run(self, progress: ProgressFactory | None = None) -> ReplayResult:
-        return run_task(self, progress)
+    def run(
+        self, progress: ProgressFactory | None = None, watch: SessionWatch | None = None
+    ) -> ReplayResult:
+        return run_task(self, progress, watch)
 
     def lost(self, why: str) -> ReplayResult:
         return _failed(
@@ -130,21 +138,24 @@ def make_tasks(
     return tasks
 
 
-def run_task(task: ReplayTask, progress: ProgressFactory | None = None) -> ReplayResult:
-    """Replay one recording; every problem with it is its error result. `progress`: see
-    `replay_recording`. With properties (`ReplayOptions.properties`), the replay's
-    recording is checked here, where it was written (a scratch file when the task has no
-    output), and the verdicts travel back with the result."""
+def run_task(
+    task: ReplayTask, progress: ProgressFactory | None = None, watch: SessionWatch | None = None
+) -> ReplayResult:
+    """Replay one recording; every problem with it is its error result. `progress` and
+    `watch` (only where the task runs in this process): see `replay_recording`. With
+    properties (`ReplayOptions.properties`), the replay's recording is checked here,
+    where it was written (a scratch file when the task has no output), and the verdicts
+    travel back with the result."""
     if next(_replays) % COLLECT_EVERY == 0:
         gc.collect()
     if not task.options.properties:
-        return _replay(task, progress)
+        return _replay(task, progress, watch)
     with tempfile.TemporaryDirectory(prefix="aeroexec-replay-") as scratch:
         kept = task.options.output is not None
         if not kept:
             output = output_for(task.recording, scratch)
             task = replace(task, options=replace(task.options, output=output))
-        result = _replay(task, progress)
+        result = _replay(task, progress, watch)
         if result.error is not None or result.output is None:
             return result if kept else replace(result, output=None)
         try:
@@ -166,12 +177,15 @@ def _property_set(documents: tuple[tuple[str, str], ...]) -> PropertySet:
     return load_property_documents(documents)
 
 
-def _replay(task: ReplayTask, progress: ProgressFactory | None) -> ReplayResult:
+def _replay(
+    task: ReplayTask, progress: ProgressFactory | None, watch: SessionWatch | None
+) -> ReplayResult:
     try:
         if is_url(task.location):
             with fetched(task.location) as local:
-                return renamed(replay_file(local, task.options, progress), local, task.recording)
-        result = replay_file(task.location, task.options, progress)
+                replayed = replay_file(local, task.options, progress, watch)
+                return renamed(replayed, local, task.recording)
+        result = replay_file(task.location, task.options, progress, watch)
         if task.location != task.recording:
             result = renamed(result, task.location, task.recording)
         return result

@@ -1,11 +1,11 @@
-"""`LiveView`: a session served live as it is recorded (`run --live`, `fly --live`).
+"""`LiveView`: a session served live as it is recorded (`--live` on `run`, `fly`, `replay`).
 
     live = LiveView(LiveOptions(port=8765, rerun_port=9876), label="flight.mcap")
     simulate(SessionConfig(..., tap=live), observers=[live])
     live.close()
 
 Two servers, both fed by the recorder's tap (`aeroexec.recording.tap`), never by an
-encoder of their own:
+encoder of their own (the second only when asked for):
 
 * **Foxglove WebSocket** (`foxglove.sdk.v1`, the `foxglove-sdk` package): each channel of
   the recording, with its topic and schema, and each message with the recording's bytes
@@ -15,17 +15,16 @@ encoder of their own:
   connected when a channel appears gets its first message too. The service
   `/abort_mission` ends the mission (the on-exit policy then applies); the catalog and
   the session's settings are parameters a viewer can read and cannot change.
-* **Rerun gRPC** (rerun-sdk's `GrpcServerSink`): the rows `aeroexec view` would write
-  for the same recording (`SessionConverter`, reading each message as the reader
-  reads the file), with the same blueprint. Rerun's server keeps what was sent, so a
-  viewer that connects late still gets the whole session.
+* **Rerun gRPC** (`aeroexec.viz.live_rerun`, with `rerun_port`): the rows `aeroexec
+  view` would write for the same recording, with the same blueprint. It costs most of
+  the view's CPU (benchmarks/live.py), and rerun-sdk ~0.8 s of CPU to import: a
+  Foxglove or Lichtblick user does not pay for it.
 
 Both listen on 127.0.0.1 unless told otherwise (`--allow-remote`).
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import os
 import re
@@ -33,33 +32,24 @@ import socket
 import stat
 import threading
 import time
-import uuid
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import foxglove
 import orjson
-import rerun as rr
 from foxglove.websocket import Capability, ChannelView, Client, ServerListener
 
 from aeroexec import interrupts
-from aeroexec.errors import ViewerError, WorldError
+from aeroexec.errors import ViewerError
 from aeroexec.executive.messages import ServiceCallRecord, TopicRecord
-from aeroexec.recording.reader import ChannelInfo, decode_record
-from aeroexec.recording.schemas import SERVICE_CALL
-from aeroexec.vehicles.world import parse_world
-from aeroexec.viz.blueprint import build_blueprint
-from aeroexec.viz.columns import ColumnWriter
-from aeroexec.viz.convert import SessionConverter, draws
-from aeroexec.viz.layout import layouts_for
-from aeroexec.viz.scene import WORLD_ATTACHMENT, log_view_coordinates, trajectory_color
-from aeroexec.viz.view import APPLICATION_ID, start_source
+from aeroexec.recording.reader import ChannelInfo
+from aeroexec.viz.ports import LOOPBACK, check_port_free
 
 if TYPE_CHECKING:
     from aeroexec.executive.executive import Executive
+    from aeroexec.viz.live_rerun import RerunLive
 
-LOOPBACK = "127.0.0.1"
 DEFAULT_FOXGLOVE_PORT = 8765
 DEFAULT_RERUN_PORT = 9876
 #: How long a new channel's messages wait for a viewer to subscribe (s).
@@ -69,7 +59,10 @@ CHECK_S = 0.05
 #: How long after a subscription its held messages are sent (s).
 RELEASE_DELAY_S = 0.002
 #: How many times a channel whose subscription the server refused is advertised again.
-READVERTISE = 5
+#: On a loaded machine (three live sessions on two cores) one channel was refused up to
+#: ~10 times in a row when a burst of channels was advertised at once, and 5 tries lost
+#: whole channels in 4 of 36 sessions; with 30, none of 18 lost a message.
+READVERTISE = 30
 #: The SDK's logger, and its line, for a subscription it refused.
 SDK_CLIENT_LOGGER = "foxglove.websocket.connected_client"
 _REFUSED = re.compile(r"attempted to subscribe to unknown channel: (\d+)")
@@ -78,9 +71,6 @@ _REFUSED = re.compile(r"attempted to subscribe to unknown channel: (\d+)")
 BACKLOG = 1 << 16
 #: After the session, how long the servers stay up for the last messages to leave (s).
 LINGER_S = 0.3
-#: How often the Rerun rows held by the column writer are sent (s of wall time): as
-#: often as Rerun's own batcher sends what is logged row by row (each send costs ~1 ms).
-RERUN_SEND_S = 0.2
 ABORT_SERVICE = "/abort_mission"
 PARAMETER_PREFIX = "aeroexec/"
 
@@ -90,8 +80,8 @@ class LiveOptions:
     host: str = LOOPBACK
     #: The Foxglove WebSocket server's port (0: any free one).
     port: int = DEFAULT_FOXGLOVE_PORT
-    #: The Rerun gRPC server's port; None: no Rerun stream.
-    rerun_port: int | None = DEFAULT_RERUN_PORT
+    #: The Rerun gRPC server's port (0: any free one); None: no Rerun stream.
+    rerun_port: int | None = None
     #: Start the mission only once a viewer has subscribed.
     wait_viewer: bool = False
     #: What the mission's abort asks the session's ending for (`land`, `hold`, `none`).
@@ -107,21 +97,6 @@ def _object_schema(name: str) -> foxglove.MessageSchema:
     return foxglove.MessageSchema(
         encoding="json", schema=foxglove.Schema(name=name, encoding="jsonschema", data=data)
     )
-
-
-def check_port_free(host: str, port: int, what: str) -> None:
-    """`ViewerError` when `port` cannot be listened on (Rerun's server fails later, and
-    only in its log, otherwise)."""
-    if port == 0:
-        return
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            probe.bind((host, port))
-        except OSError as exc:
-            raise ViewerError(
-                f"{what} cannot listen on {host}:{port}: {exc.strerror or exc}"
-            ) from None
 
 
 def no_delay(port: int) -> int:
@@ -160,12 +135,6 @@ def no_delay(port: int) -> int:
             except OSError:
                 continue
     return done
-
-
-def free_port(host: str = LOOPBACK) -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        probe.bind((host, 0))
-        return int(probe.getsockname()[1])
 
 
 class FoxgloveLive(ServerListener):
@@ -412,94 +381,6 @@ class FoxgloveLive(ServerListener):
         self._log.removeFilter(self._refusal)
 
 
-class RerunLive:
-    """The Rerun gRPC stream: what `view` would write for the recording, row for row."""
-
-    def __init__(self, options: LiveOptions, label: str) -> None:
-        assert options.rerun_port is not None
-        port = options.rerun_port or free_port(options.host)
-        check_port_free(options.host, port, "the Rerun gRPC server")
-        self._label = label
-        (self._layout,) = layouts_for([label])
-        self.stream = rr.RecordingStream(
-            APPLICATION_ID, recording_id=str(uuid.uuid4()), send_properties=False
-        )
-        self.stream.set_log_time_enabled(False)
-        self.stream.set_log_tick_enabled(False)
-        sink = rr.GrpcServerSink(bind_ip=options.host, port=port)
-        self.stream.set_sinks(sink, default_blueprint=build_blueprint([self._layout]))
-        log_view_coordinates(self.stream)
-        self.url = f"rerun+http://{options.host}:{port}/proxy"
-        self._writer = ColumnWriter(self.stream)
-        #: channel id -> (the channel, whether its messages become rows)
-        self._channels: dict[int, tuple[ChannelInfo, bool]] = {}
-        self._prefix = "/"
-        self._converter: SessionConverter | None = None
-        self._sim = True
-        self._world = None
-        self._sent = time.monotonic()
-        self._finished = False
-
-    def recording_started(
-        self, metadata: Mapping[str, str], attachments: Mapping[str, bytes]
-    ) -> None:
-        self._sim = metadata.get("clock") == "sim"
-        self._prefix = f"/{metadata.get('drone', 'drone1')}/"
-        world_text = attachments.get(WORLD_ATTACHMENT)
-        if world_text is not None:
-            with contextlib.suppress(WorldError):
-                self._world = parse_world(world_text.decode("utf-8", errors="replace"), "world")
-        self.stream.send_recording_name(self._label)
-        start_source(
-            self.stream,
-            self._layout,
-            {"file": self._label, **metadata},
-            self._world,
-            trajectory_color(0),
-        )
-
-    def channel_added(self, channel: ChannelInfo) -> None:
-        name = channel.topic.removeprefix(self._prefix)
-        self._channels[channel.id] = (channel, channel.schema_name == SERVICE_CALL or draws(name))
-
-    def message_written(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
-        channel, drawn = self._channels[channel_id]
-        converter = self._converter
-        if converter is not None and not drawn:
-            converter.pass_over(log_time_ns)  # not decoded: most of a flight's messages
-            return
-        record = decode_record(channel, log_time_ns, data)
-        if record is None:
-            return
-        if converter is None:
-            converter = self._converter = SessionConverter(
-                self.stream,
-                self._writer,
-                self._layout,
-                origin_ns=0 if self._sim else log_time_ns,
-                world=self._world,
-                color=trajectory_color(0),
-            )
-        converter.feed(record)
-        now = time.monotonic()
-        if now - self._sent >= RERUN_SEND_S:
-            self._writer.flush()
-            self._sent = now
-
-    def recording_closed(self) -> None:
-        if self._finished:
-            return
-        self._finished = True
-        if self._converter is not None:
-            self._converter.finish()
-        self._writer.flush()
-        self.stream.flush()
-
-    def close(self) -> None:
-        self.recording_closed()
-        self.stream.disconnect()
-
-
 class LiveView:
     """Both servers, as one tap for the recorder and one observer of the session."""
 
@@ -513,7 +394,11 @@ class LiveView:
         self.rerun: RerunLive | None = None
         try:
             if options.rerun_port is not None:
-                self.rerun = RerunLive(options, label)
+                # Only when asked for: rerun-sdk costs ~0.8 s of CPU to import, and its
+                # stream most of the view's CPU per message (benchmarks/live.py).
+                from aeroexec.viz.live_rerun import RerunLive
+
+                self.rerun = RerunLive(options.host, options.rerun_port, label)
         except BaseException:
             self.foxglove.server.stop()
             raise
@@ -582,7 +467,7 @@ class LiveView:
                 return {"ok": False, "error": "no mission is running"}
             self._mission = False
             action = self.options.abort_action
-            executive.request_stop("aborted by a live viewer", action)
+            executive.request_stop("aborted by a live viewer", action, by="abort")
         return {"ok": True, "action": action}
 
     def close(self) -> None:
