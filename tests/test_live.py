@@ -14,6 +14,10 @@ it runs, and what they receive is checked against the recording the same command
 from __future__ import annotations
 
 import collections
+import hashlib
+import json
+import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -146,6 +150,54 @@ def test_run_live_serves_exactly_the_recording_and_the_rerun_stream_is_the_view(
     for entity, rows in written.static.items():
         assert without_row_ids(live.static[entity]) == without_row_ids(rows), entity
     assert len(live.rows["/vehicle"]) > 100  # the flight, not an empty stream
+
+
+#: A node_modules folder with @foxglove/ws-protocol and ws (`npm install` them anywhere):
+#: the test then connects with Foxglove's own protocol client, the one its apps use.
+FOXGLOVE_NODE_MODULES = os.environ.get("AEROEXEC_FOXGLOVE_NODE_MODULES", "")
+WS_CLIENT = Path(__file__).parent / "tools" / "foxglove_ws_client.js"
+
+
+@pytest.mark.skipif(
+    not (Path(FOXGLOVE_NODE_MODULES) / "@foxglove" / "ws-protocol").is_dir()
+    or shutil.which("node") is None,
+    reason="set AEROEXEC_FOXGLOVE_NODE_MODULES to a node_modules with @foxglove/ws-protocol "
+    "and ws (and install node) to connect with Foxglove's own client",
+)
+def test_foxglove_s_own_client_receives_exactly_the_recording(
+    tmp_path: Path, procs: list[AeroexecProcess]
+) -> None:
+    record = tmp_path / "flight.mcap"
+    proc = Live(["run", str(APPENDIX_C), "-o", str(record), "--live", "--port", "0",
+                 "--wait-viewer", "--speed", "10"])  # fmt: skip
+    procs.append(proc)
+    url = proc.wait_for("live: Foxglove, Lichtblick: ").split(": ")[-1].strip()
+    # Into a file: a pipe nobody reads while the run goes on would stall the client.
+    received_path = tmp_path / "received.jsonl"
+    with received_path.open("w") as sink:
+        client = subprocess.Popen(
+            ["node", str(WS_CLIENT), url],
+            stdout=sink,
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**os.environ, "NODE_PATH": FOXGLOVE_NODE_MODULES},
+        )
+        code, _, err = proc.finish()
+        assert code == 0, err
+        _, client_err = client.communicate(timeout=60)
+    assert client.returncode == 0, client_err
+    lines = [json.loads(line) for line in received_path.read_text().splitlines()]
+    received = collections.Counter(
+        (m["topic"], int(m["log_time"]), m["sha1"]) for m in lines if "topic" in m
+    )
+    expected = collections.Counter(
+        (topic, log_time, hashlib.sha1(data).hexdigest())
+        for topic, log_time, data in recorded_messages(record)
+    )
+    assert received == expected
+    channels = open_recording(record).channels.values()
+    advertised = {m["advertised"]: m["schemaName"] for m in lines if "advertised" in m}
+    assert advertised == {c.topic: c.schema_name for c in channels}
 
 
 def test_a_live_run_records_the_same_file_as_a_plain_run(tmp_path: Path) -> None:
