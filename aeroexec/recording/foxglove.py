@@ -74,18 +74,27 @@ def stamp(log_time_ns: int) -> dict[str, int]:
 
 
 # -- the frame tree --------------------------------------------------------------------------
+# A transform goes with every vehicle state whose pose changed (a third of a flying
+# session's ticks): built with few calls, from locally bound functions.
+_isfinite = math.isfinite
+_sin = math.sin
+_cos = math.cos
+
+
 def transform(
     x: float, y: float, z: float, yaw: float, log_time_ns: int, child_frame: str
 ) -> dict[str, Any] | None:
     """A `foxglove.FrameTransform` world -> `child_frame` (None if a value is not finite)."""
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(yaw)):
+    if not (_isfinite(x) and _isfinite(y) and _isfinite(z) and _isfinite(yaw)):
         return None
+    sec, nsec = divmod(log_time_ns if log_time_ns > 0 else 0, _NS)
+    half = yaw / 2
     return {
-        "timestamp": stamp(log_time_ns),
+        "timestamp": {"sec": sec, "nsec": nsec},
         "parent_frame_id": WORLD_FRAME,
         "child_frame_id": child_frame,
         "translation": {"x": x, "y": y, "z": z},
-        "rotation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
+        "rotation": {"x": 0.0, "y": 0.0, "z": _sin(half), "w": _cos(half)},
     }
 
 
