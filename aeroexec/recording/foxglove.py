@@ -271,11 +271,15 @@ class CapabilityChanges:
         self._counts: dict[str, int] = {}
 
     def update(self, payload: Mapping[str, Any]) -> list[dict[str, Any]]:
+        # Once per activation: plain dicts are told apart by `type(...) is`, before
+        # isinstance against the Mapping ABC.
         now: dict[str, int] = {}
         for item in payload.get("capabilities") or ():
-            if isinstance(item, Mapping) and isinstance(item.get("name"), str):
-                references = item.get("references", 1)
-                now[item["name"]] = references if isinstance(references, int) else 1
+            if type(item) is dict or isinstance(item, Mapping):
+                name = item.get("name")
+                if type(name) is str or isinstance(name, str):
+                    references = item.get("references", 1)
+                    now[name] = references if isinstance(references, int) else 1
         last = self._counts
         changes = [{"name": n, "references": c} for n, c in now.items() if last.get(n) != c]
         changes += [{"name": n, "references": 0} for n in last if n not in now]
@@ -351,10 +355,22 @@ class PanelFeed:
         sent; the scene again when the moving object is due."""
         if not self._begun:
             self.begin(log_time_ns)
-        pose = (state.get("position"), state.get("yaw"))
+        position = state.get("position")
+        pose = (position, state.get("yaw"))
         if pose != self._last:
             self._last = pose
-            frame = state_transform(state, log_time_ns, self._frame)
+            try:  # state_transform, inline: a third of a flying session's ticks
+                px, py, pz = position  # type: ignore[misc]
+                frame = transform(
+                    float(px),
+                    float(py),
+                    float(pz),
+                    float(state.get("yaw", 0.0)),
+                    log_time_ns,
+                    self._frame,
+                )
+            except (TypeError, ValueError):
+                frame = None
             if frame is not None:
                 self._emit(TRANSFORM_TOPIC, log_time_ns, frame)
         due = self._due
