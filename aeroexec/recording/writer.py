@@ -600,8 +600,8 @@ class Recorder:
         if not pending:
             return
         add = self._add
-        for message in pending:
-            add(*message)
+        for channel, log_time_ns, data, publish_ns, sequence in pending:
+            add(channel, log_time_ns, data, publish_ns, sequence)
         self._last_ns = pending[-1][1]
         pending.clear()
 
