@@ -33,7 +33,7 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from aeroexec.vehicles.world import World
+    from aeroexec.vehicles.world import MovingObject, World
 
 #: The frame the vehicle's position is expressed in (local ENU, the simulator's world).
 WORLD_FRAME = "world"
@@ -287,7 +287,8 @@ class CapabilityChanges:
         return changes
 
 
-#: Where a derived message goes: (topic inside the namespace, log time, payload).
+#: Where a derived message goes: (topic inside the namespace, log time, payload). The
+#: payload is to be encoded, not changed or kept: the scenes share the vehicle's entity.
 Emit = Callable[[str, int, dict[str, Any]], None]
 #: A vehicle pose: x, y, z (m, ENU) and yaw (rad, counter-clockwise from east).
 Pose = tuple[float, float, float, float]
@@ -304,12 +305,14 @@ class PanelFeed:
 
     __slots__ = (
         "_begun",
+        "_body",
         "_capabilities",
         "_drone",
         "_due",
         "_emit",
         "_frame",
         "_last",
+        "_moving",
         "_period",
         "_start",
         "_world",
@@ -322,6 +325,10 @@ class PanelFeed:
         self._world = world
         self._emit = emit
         self._frame = vehicle_frame(drone)
+        #: The vehicle's entity but its timestamp (its first key).
+        body = vehicle_entity(0, drone)
+        del body["timestamp"]
+        self._body = body
         self._start = start_pose
         self._begun = False
         #: The pose of the last transform sent, as a vehicle/state holds it: a state with
@@ -329,6 +336,9 @@ class PanelFeed:
         self._last: tuple[Any, Any] | None = None
         #: While an object moves: how often the scene is sent again, and when next.
         self._period = object_period_ns(world)
+        self._moving: MovingObject | None = None
+        if self._period is not None and world is not None:
+            self._moving = world.object
         self._due: int | None = None
         self._capabilities = CapabilityChanges()
 
@@ -387,11 +397,13 @@ class PanelFeed:
             self._emit(CAPABILITY_TOPIC, log_time_ns, change)
 
     def _scene(self, log_time_ns: int) -> None:
-        self._emit(
-            SCENE_TOPIC,
-            log_time_ns,
-            scene_update(moving_entities(log_time_ns, self._drone, self._world)),
-        )
+        # moving_entities, with the vehicle's body built once: only its timestamp
+        # changes (the payloads are encoded, never changed, so they may share it).
+        entities = [{"timestamp": stamp(log_time_ns), **self._body}]
+        moving = self._moving
+        if moving is not None:  # where the object is now
+            entities.append(object_entity(log_time_ns, moving.at(log_time_ns / _NS)))
+        self._emit(SCENE_TOPIC, log_time_ns, scene_update(entities))
         period, due = self._period, self._due
         if period is None:
             return
