@@ -98,19 +98,6 @@ def transform(
     }
 
 
-def state_transform(
-    state: Mapping[str, Any], log_time_ns: int, child_frame: str
-) -> dict[str, Any] | None:
-    """The transform of a `vehicle/state` payload (None if it has no usable pose)."""
-    try:
-        px, py, pz = state["position"]
-        return transform(
-            float(px), float(py), float(pz), float(state.get("yaw", 0.0)), log_time_ns, child_frame
-        )
-    except (KeyError, TypeError, ValueError):
-        return None
-
-
 # -- the scene -------------------------------------------------------------------------------
 def _color(rgb: tuple[int, int, int], alpha: float = 1.0) -> dict[str, float]:
     r, g, b = rgb
@@ -369,7 +356,7 @@ class PanelFeed:
         pose = (position, state.get("yaw"))
         if pose != self._last:
             self._last = pose
-            try:  # state_transform, inline: a third of a flying session's ticks
+            try:  # the state's pose; none if it has no usable one
                 px, py, pz = position  # type: ignore[misc]
                 frame = transform(
                     float(px),

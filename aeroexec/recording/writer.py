@@ -555,7 +555,7 @@ class Recorder:
 
     def _write(self, channel: int, log_time_ns: int, data: bytes) -> None:
         # Every message of a simulated session comes here: kept as add_message's
-        # arguments (the sequence is a uint32), then the flush bound, as counts down.
+        # arguments (the sequence is a uint32); the flush bound is counted down.
         if self._closed:
             if self._lost:
                 return  # already reported (OutputLost); the session is unwinding
