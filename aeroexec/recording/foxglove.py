@@ -33,7 +33,7 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from aeroexec.vehicles.world import World
+    from aeroexec.vehicles.world import MovingObject, World
 
 #: The frame the vehicle's position is expressed in (local ENU, the simulator's world).
 WORLD_FRAME = "world"
@@ -74,32 +74,28 @@ def stamp(log_time_ns: int) -> dict[str, int]:
 
 
 # -- the frame tree --------------------------------------------------------------------------
+# A transform goes with every vehicle state whose pose changed (a third of a flying
+# session's ticks): built with few calls, from locally bound functions.
+_isfinite = math.isfinite
+_sin = math.sin
+_cos = math.cos
+
+
 def transform(
     x: float, y: float, z: float, yaw: float, log_time_ns: int, child_frame: str
 ) -> dict[str, Any] | None:
     """A `foxglove.FrameTransform` world -> `child_frame` (None if a value is not finite)."""
-    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(yaw)):
+    if not (_isfinite(x) and _isfinite(y) and _isfinite(z) and _isfinite(yaw)):
         return None
+    sec, nsec = divmod(log_time_ns if log_time_ns > 0 else 0, _NS)
+    half = yaw / 2
     return {
-        "timestamp": stamp(log_time_ns),
+        "timestamp": {"sec": sec, "nsec": nsec},
         "parent_frame_id": WORLD_FRAME,
         "child_frame_id": child_frame,
         "translation": {"x": x, "y": y, "z": z},
-        "rotation": {"x": 0.0, "y": 0.0, "z": math.sin(yaw / 2), "w": math.cos(yaw / 2)},
+        "rotation": {"x": 0.0, "y": 0.0, "z": _sin(half), "w": _cos(half)},
     }
-
-
-def state_transform(
-    state: Mapping[str, Any], log_time_ns: int, child_frame: str
-) -> dict[str, Any] | None:
-    """The transform of a `vehicle/state` payload (None if it has no usable pose)."""
-    try:
-        px, py, pz = state["position"]
-        return transform(
-            float(px), float(py), float(pz), float(state.get("yaw", 0.0)), log_time_ns, child_frame
-        )
-    except (KeyError, TypeError, ValueError):
-        return None
 
 
 # -- the scene -------------------------------------------------------------------------------
@@ -262,11 +258,15 @@ class CapabilityChanges:
         self._counts: dict[str, int] = {}
 
     def update(self, payload: Mapping[str, Any]) -> list[dict[str, Any]]:
+        # Once per activation: plain dicts are told apart by `type(...) is`, before
+        # isinstance against the Mapping ABC.
         now: dict[str, int] = {}
         for item in payload.get("capabilities") or ():
-            if isinstance(item, Mapping) and isinstance(item.get("name"), str):
-                references = item.get("references", 1)
-                now[item["name"]] = references if isinstance(references, int) else 1
+            if type(item) is dict or isinstance(item, Mapping):
+                name = item.get("name")
+                if type(name) is str or isinstance(name, str):
+                    references = item.get("references", 1)
+                    now[name] = references if isinstance(references, int) else 1
         last = self._counts
         changes = [{"name": n, "references": c} for n, c in now.items() if last.get(n) != c]
         changes += [{"name": n, "references": 0} for n in last if n not in now]
@@ -274,7 +274,8 @@ class CapabilityChanges:
         return changes
 
 
-#: Where a derived message goes: (topic inside the namespace, log time, payload).
+#: Where a derived message goes: (topic inside the namespace, log time, payload). The
+#: payload is to be encoded, not changed or kept: the scenes share the vehicle's entity.
 Emit = Callable[[str, int, dict[str, Any]], None]
 #: A vehicle pose: x, y, z (m, ENU) and yaw (rad, counter-clockwise from east).
 Pose = tuple[float, float, float, float]
@@ -291,12 +292,14 @@ class PanelFeed:
 
     __slots__ = (
         "_begun",
+        "_body",
         "_capabilities",
         "_drone",
         "_due",
         "_emit",
         "_frame",
         "_last",
+        "_moving",
         "_period",
         "_start",
         "_world",
@@ -309,6 +312,10 @@ class PanelFeed:
         self._world = world
         self._emit = emit
         self._frame = vehicle_frame(drone)
+        #: The vehicle's entity but its timestamp (its first key).
+        body = vehicle_entity(0, drone)
+        del body["timestamp"]
+        self._body = body
         self._start = start_pose
         self._begun = False
         #: The pose of the last transform sent, as a vehicle/state holds it: a state with
@@ -316,6 +323,9 @@ class PanelFeed:
         self._last: tuple[Any, Any] | None = None
         #: While an object moves: how often the scene is sent again, and when next.
         self._period = object_period_ns(world)
+        self._moving: MovingObject | None = None
+        if self._period is not None and world is not None:
+            self._moving = world.object
         self._due: int | None = None
         self._capabilities = CapabilityChanges()
 
@@ -342,10 +352,22 @@ class PanelFeed:
         sent; the scene again when the moving object is due."""
         if not self._begun:
             self.begin(log_time_ns)
-        pose = (state.get("position"), state.get("yaw"))
+        position = state.get("position")
+        pose = (position, state.get("yaw"))
         if pose != self._last:
             self._last = pose
-            frame = state_transform(state, log_time_ns, self._frame)
+            try:  # the state's pose; none if it has no usable one
+                px, py, pz = position  # type: ignore[misc]
+                frame = transform(
+                    float(px),
+                    float(py),
+                    float(pz),
+                    float(state.get("yaw", 0.0)),
+                    log_time_ns,
+                    self._frame,
+                )
+            except (TypeError, ValueError):
+                frame = None
             if frame is not None:
                 self._emit(TRANSFORM_TOPIC, log_time_ns, frame)
         due = self._due
@@ -362,11 +384,13 @@ class PanelFeed:
             self._emit(CAPABILITY_TOPIC, log_time_ns, change)
 
     def _scene(self, log_time_ns: int) -> None:
-        self._emit(
-            SCENE_TOPIC,
-            log_time_ns,
-            scene_update(moving_entities(log_time_ns, self._drone, self._world)),
-        )
+        # moving_entities, with the vehicle's body built once: only its timestamp
+        # changes (the payloads are encoded, never changed, so they may share it).
+        entities = [{"timestamp": stamp(log_time_ns), **self._body}]
+        moving = self._moving
+        if moving is not None:  # where the object is now
+            entities.append(object_entity(log_time_ns, moving.at(log_time_ns / _NS)))
+        self._emit(SCENE_TOPIC, log_time_ns, scene_update(entities))
         period, due = self._period, self._due
         if period is None:
             return

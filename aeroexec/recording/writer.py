@@ -301,11 +301,13 @@ class Recorder:
         #: The messages of the chunk in progress, as `add_message`'s arguments
         #: (channel, log time, data, publish time, sequence), not yet handed to the writer.
         self._pending: list[tuple[int, int, bytes, int, int]] = []
-        #: Since the last flush (a new channel hands the pending messages over earlier):
-        #: how many messages, their bytes, the log time of the first.
-        self._unflushed = 0
-        self._unflushed_bytes = 0
-        self._unflushed_since = 0
+        self._keep = self._pending.append
+        #: Until the flush bound closes the chunk (a new channel hands the pending
+        #: messages over earlier, but closes nothing): how many more messages, how many
+        #: more bytes; and the log time of the first message since the last flush.
+        self._room = flush_messages
+        self._room_bytes = flush_bytes
+        self._unflushed_since: int | None = None
         self._schemas: dict[str, int] = {}
         #: service -> channel id, topic (inside the namespace) -> channel id
         self._services: dict[str, int] = {}
@@ -328,6 +330,10 @@ class Recorder:
         self._forget_finisher: Callable[[], None] = lambda: None
         #: Sees every channel and message as written (the live view): a tee, not a copy.
         self._tap = tap
+        if tap is not None or flush_interval_ns is not None:
+            # A live view or a time bound: the general path. A simulated session's
+            # messages take the plain `_write`, which checks neither.
+            self._write = self._write_watched  # type: ignore[method-assign]
         try:
             self._guard(
                 self._start, dict(metadata or {}), dict(attachments or {}), dict(records or {})
@@ -548,28 +554,45 @@ class Recorder:
         return channel
 
     def _write(self, channel: int, log_time_ns: int, data: bytes) -> None:
+        # Every message of a simulated session comes here: kept as add_message's
+        # arguments (the sequence is a uint32); the flush bound is counted down.
         if self._closed:
             if self._lost:
                 return  # already reported (OutputLost); the session is unwinding
             self._check_open()
         count = self._count
-        # add_message's arguments; the sequence is a uint32
-        self._pending.append((channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF))
+        self._count = count + 1
+        self._keep((channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF))
+        room = self._room - 1
+        room_bytes = self._room_bytes - len(data)
+        if room > 0 and room_bytes > 0:
+            self._room = room
+            self._room_bytes = room_bytes
+            return
+        self.flush()
+
+    def _write_watched(self, channel: int, log_time_ns: int, data: bytes) -> None:
+        """`_write` with a live view (`tap`) and the time bound of a live session."""
+        if self._closed:
+            if self._lost:
+                return
+            self._check_open()
+        count = self._count
+        self._count = count + 1
+        self._keep((channel, log_time_ns, data, log_time_ns, count & 0xFFFFFFFF))
         if self._tap is not None:  # a live viewer sees it now, not at the next flush
             self._tap.message_written(channel, log_time_ns, data)
-        self._count = count + 1
-        unflushed = self._unflushed
-        if not unflushed:
-            self._unflushed_since = log_time_ns
-        self._unflushed = unflushed = unflushed + 1
-        self._unflushed_bytes = size = self._unflushed_bytes + len(data)
+        since = self._unflushed_since
+        if since is None:
+            self._unflushed_since = since = log_time_ns
+        room = self._room - 1
+        room_bytes = self._room_bytes - len(data)
         interval = self.flush_interval_ns
-        if (
-            unflushed >= self.flush_messages
-            or size >= self.flush_bytes
-            or (interval is not None and log_time_ns - self._unflushed_since >= interval)
-        ):
-            self.flush()
+        if room > 0 and room_bytes > 0 and (interval is None or log_time_ns - since < interval):
+            self._room = room
+            self._room_bytes = room_bytes
+            return
+        self.flush()
 
     def _hand_over(self) -> None:
         """The pending messages to the writer (into its chunk in progress), in order."""
@@ -577,15 +600,17 @@ class Recorder:
         if not pending:
             return
         add = self._add
-        for message in pending:
-            add(*message)
+        for channel, log_time_ns, data, publish_ns, sequence in pending:
+            add(channel, log_time_ns, data, publish_ns, sequence)
         self._last_ns = pending[-1][1]
         pending.clear()
 
     def _flush(self) -> None:
         self._hand_over()
         self._writer.flush()
-        self._unflushed = self._unflushed_bytes = 0
+        self._room = self.flush_messages
+        self._room_bytes = self.flush_bytes
+        self._unflushed_since = None
 
     def _finish(self) -> None:
         self._hand_over()
