@@ -33,7 +33,7 @@ from aeroexec.properties import nodes
 
 Array = np.ndarray
 _INF = float("inf")
-_TESTS: dict[str, Callable[[Array, Array], Array]] = {
+TESTS: dict[str, Callable[[Array, Array], Array]] = {
     "<": operator.lt,
     "<=": operator.le,
     "==": operator.eq,
@@ -71,7 +71,7 @@ class _Evaluation:
     def compare(self, node: nodes.Compare) -> Array:
         left, right = self.value(node.left), self.value(node.right)
         if self.boolean:
-            return np.where(_TESTS[node.op](left, right), 1.0, -1.0)
+            return np.where(TESTS[node.op](left, right), 1.0, -1.0)
         if node.op == "==":
             return -np.abs(left - right)
         if node.op == "!==":
@@ -275,7 +275,7 @@ def _instant_pair(
 ) -> Callable[[Sample], float] | None:
     op = node.op
     if isinstance(node, nodes.Compare):
-        test = _TESTS[op]
+        test = TESTS[op]
         # A signal against a number, the common case (a geofence): one call, not three.
         if isinstance(node.left, nodes.Signal) and isinstance(node.right, nodes.Constant):
             name, bound = node.left.name, float(node.right.value)
