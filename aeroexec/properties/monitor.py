@@ -108,9 +108,9 @@ class PropertyMonitor:
         self._instant: list[tuple[Property, Callable[[Sample], float]]] = []
         self._instant_names: tuple[str, ...] = ()
         self._group()
-        #: Their tests on a state, and all of them as one (None: none is judged by row).
+        #: Their tests on a state, and the tests alone (none: none is judged by row).
         self._state_tests: list[tuple[Property, StateTest]] = []
-        self._state_holds: StateTest | None = None
+        self._state_holds: tuple[StateTest, ...] = ()
         #: The tick the last message fell in (kept while ticks are judged as they end),
         #: and the start of the tick whose first message has them judged.
         self._open = -1
@@ -178,13 +178,18 @@ class PropertyMonitor:
                 self._ticks_over(t_ns)
             states = self._states
             states.append(record)
-            holds = self._state_holds
-            if holds is not None:  # judge the properties judged by row on it
+            tests = self._state_holds
+            if tests:  # judge the properties judged by row on it
                 state = record.data
+                kept = False
                 try:
-                    kept = holds(state) and "defaulted" not in state
+                    for holds in tests:
+                        if not holds(state):
+                            break
+                    else:
+                        kept = "defaulted" not in state
                 except _UNJUDGED:
-                    kept = False
+                    pass
                 if not kept:
                     self._state_broke(record)
             if len(states) >= STATES_AT_ONCE:
@@ -256,7 +261,7 @@ class PropertyMonitor:
             return
         self._by_row = [entry for entry in self._row_able if entry[0].name in on]
         self._state_tests = self._tests_on(first)
-        self._state_holds = _all_of([holds for _, holds in self._state_tests])
+        self._state_holds = tuple(holds for _, holds in self._state_tests)
         self._group()
 
     def _state_broke(self, record: TopicRecord) -> None:
@@ -287,7 +292,7 @@ class PropertyMonitor:
         names = {prop.name for prop in props}
         self._by_row = [entry for entry in self._by_row if entry[0].name not in names]
         self._state_tests = [e for e in self._state_tests if e[0].name not in names]
-        self._state_holds = _all_of([holds for _, holds in self._state_tests])
+        self._state_holds = tuple(holds for _, holds in self._state_tests)
         for name in names:
             self._judged[name] = tick - 1
         self._group()
@@ -373,19 +378,6 @@ class PropertyMonitor:
         executive.bus.publish(TOPIC, data)
         level = {"error": "ERROR", "warning": "WARNING"}.get(prop.severity, "INFO")
         executive.log(message, level, f"property:{prop.name}")
-
-
-def _all_of(tests: list[StateTest]) -> StateTest | None:
-    """One test that holds where all of `tests` hold (one call a state for the common
-    one or two)."""
-    if not tests:
-        return None
-    if len(tests) == 1:
-        return tests[0]
-    if len(tests) == 2:
-        first, second = tests
-        return lambda state: first(state) and second(state)
-    return lambda state: all(holds(state) for holds in tests)
 
 
 def _holds(holds: StateTest, state: dict[str, Any]) -> bool:
