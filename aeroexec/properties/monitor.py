@@ -9,9 +9,8 @@ Vehicle states, one a tick, are fed in batches (`STATES_AT_ONCE`, and whenever t
 signals are read): the builder's work on them is the same, done in a loop that stays
 in the processor's caches instead of once a tick between the simulator's own work
 (about 3 ms less of a 10-minute patrol's 15, measured). The other messages, rare, are
-fed as they come:
-they change other signals than the states do, so the order between the two is kept
-where it matters.
+fed as they come: they change other signals than the states do, so the order between
+the two is kept where it matters.
 
 During the session it judges the properties that can act (those with an `action`) as
 soon as their verdict on a tick is final. A tick is judged when it is over: when the
