@@ -631,6 +631,8 @@ class SignalBuilder:
             )
             if len(row) != ROW_LENGTH:
                 row = _row_of(k, data)
+            # A velocity that is no numbers makes no sample (its square is the speed).
+            0.0 + row[4] + row[5] + row[6]
             low = row[7] < LOW_BATTERY_LEVEL
             fault = data.get("fault") or ""
         except (KeyError, IndexError, TypeError, AttributeError):
