@@ -12,8 +12,8 @@
     recorded run costs more, and the line after the figures says what share of it the
     monitor is). Two figures: the 18 properties without an action (fed every message,
     judged at the end), and all 20, two with an action (a geofence and a battery floor,
-    never violated: bodies of the present tick, judged at every tick as it ends). Target:
-    the monitor's extra CPU <= 10 % of the run, 1.1x.
+    never violated: a vehicle signal against a number, judged on every vehicle state as
+    it comes). Target: the monitor's extra CPU <= 10 % of the run, 1.1x.
 (c) Identical: the monitor's verdicts against `check` on the recording of the same run
     (status, robustness, first violating interval of every property). Target: identical.
 
@@ -155,7 +155,7 @@ def main() -> int:
         )
         figures.append(
             Figure(
-                "10-min patrol, 20 monitored, 2 with actions (judged every tick)",
+                "10-min patrol, 20 monitored, 2 with actions (judged on every state)",
                 online["acting"],
                 online["plain"],
                 "unmonitored, unrecorded",

@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import math
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -534,6 +535,23 @@ def test_verify_checks_a_property_file_against_the_catalog(tmp_path) -> None:
     unread = aeroexec("verify", str(DEFAULT_CATALOG), "--spec", str(bad))
     assert unread.returncode == 2
     assert f"{bad}:2:32: error: unknown signal 'alt'" in unread.stderr
+
+
+@pytest.mark.parametrize("velocity", [[None, 0.0, 0.0], [0.0, "1", 0.0], [0.0, 0.0], {}])
+def test_a_state_whose_velocity_is_no_numbers_is_no_sample(velocity) -> None:
+    # Its tick holds the state before (altitude included), as a malformed state's does;
+    # position values that are no numbers are kept (NaN), as they always were.
+    builder = SignalBuilder(None)
+    state = {"position": [0.0, 0.0, 1.0], "velocity": [0.5, 0.0, 0.0], "battery": 1.0}
+    state |= {"flying": True, "armed": True, "fault": ""}
+    builder.topic("vehicle/state", 0, state)
+    odd = {**state, "position": [0.0, 0.0, 2.0], "velocity": velocity}
+    builder.topic("vehicle/state", PERIOD_NS, odd)
+    builder.topic("vehicle/state", 2 * PERIOD_NS, {**state, "position": [0.0, None, 3.0]})
+    signals = builder.finish()
+    assert signals.get("altitude").tolist() == [1.0, 1.0, 3.0]
+    assert signals.get("speed").tolist() == [0.5, 0.5, 0.5]
+    assert math.isnan(signals.get("distance_home")[2])
 
 
 def test_a_field_a_bag_import_only_defaulted_is_missing_not_guessed() -> None:

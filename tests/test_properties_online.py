@@ -6,8 +6,10 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import random
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from aeroexec.mission.script import Ending
@@ -182,6 +184,153 @@ def test_a_window_is_what_the_whole_gives_for_those_ticks(tmp_path) -> None:
         for name in names:
             assert window[name].tolist() == whole.get(name).tolist(), (start, name)
     assert _inside("/drone1/vehicle/state") == "vehicle/state"
+
+
+# -- judged by row: the same stops as judged when ticks are over ---------------------------
+def _states(rng: random.Random) -> list:
+    """Vehicle states (and some mission commands) with what a live vehicle or a bag can
+    send: several states in one tick, ticks without one, states that are malformed or not
+    numbers, ints and booleans, positions longer than 3, a state at the fence followed
+    in the same tick by one inside it, a battery that falls."""
+    from aeroexec.executive.messages import TopicRecord
+
+    records = []
+    t_ns, x, battery = 0, 0.0, 1.0
+    for _ in range(rng.randrange(20, 120)):
+        t_ns += rng.choice([0, 30_000_000, 100_000_000, 100_000_000, 350_000_000])
+        x += rng.uniform(-0.5, 0.5)
+        battery -= rng.uniform(0.0, 0.02)
+        z = rng.choice([1.5, 2, 0.0, 3.9]) if rng.random() > 0.02 else 4.1
+        position: list = [x, rng.uniform(-1, 1), z]
+        vx = rng.uniform(-1.5, 1.5) if rng.random() > 0.02 else 3.0
+        velocity: list = [vx, 0.0, rng.choice([0.0, 1])]
+        data: dict = {"position": position, "velocity": velocity, "battery": battery}
+        flying = rng.choice([True, 1]) if rng.random() > 0.02 else False
+        data |= {"flying": flying, "armed": rng.random() > 0.02, "fault": ""}
+        odd = rng.random()
+        if odd < 0.04:
+            del data["velocity"]  # malformed: no sample
+        elif odd < 0.08:
+            position[1] = None  # not a number
+        elif odd < 0.1:
+            position.append(7.0)  # longer than 3
+        elif odd < 0.12:
+            data["battery"] = "low"
+        records.append(TopicRecord("vehicle/state", data, t_ns))
+        if rng.random() < 0.08:
+            # Beyond the fence, then (mostly) back inside within the same tick.
+            out = {**data, "position": [9.0, 0.0, 1.0]}
+            records.append(TopicRecord("vehicle/state", out, t_ns))
+            back = {**data, "position": [0.5, 0.0, 1.0]}
+            if rng.random() < 0.9:
+                records.append(TopicRecord("vehicle/state", back, t_ns + 10_000_000))
+        if rng.random() < 0.1:
+            records.append(TopicRecord("mission/command", {"behavior": "LAND"}, t_ns))
+    return records
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        "distance_home <= {r}",
+        "{r} >= distance_home",
+        "altitude < 4",
+        "battery >= {b}",
+        "speed <= 2.5",
+        "landed <= 0",
+        "1 <= armed",
+    ],
+)
+def test_a_property_judged_by_row_stops_where_ticks_judged_when_over_stop(body) -> None:
+    # A vehicle signal against a number is judged on each state as it comes
+    # (`Formula.threshold`); the same test written so it is not one of those shapes is
+    # judged on each tick's values once the tick is over. Both must stop at the same
+    # tick, on any sequence of states; and the signals the monitor collects (states fed
+    # in batches) must be those of a builder fed each message as it comes.
+    from aeroexec.executive.messages import TopicRecord
+    from aeroexec.properties.signals import SignalBuilder
+    from aeroexec.properties.spec import PropertySet, parse_properties
+
+    stops = by_row_states = states = 0
+    for seed in range(60):
+        rng = random.Random(seed)
+        text = body.format(r=rng.choice([2, 3.5, 6]), b=rng.choice([0.5, 0.8, 0.95]))
+        every = rng.choice([0.1, 0.5])
+        by_row, by_tick = (
+            PropertyMonitor(
+                PropertySet(
+                    tuple(
+                        parse_properties(
+                            f"properties:\n  - name: p\n    formula: 'always({formula})'\n"
+                            "    action: land\n",
+                            "p.yaml",
+                        )
+                    ),
+                    ("p.yaml",),
+                ),
+                check_every_s=every,
+            )
+            for formula in (text, f"({text}) and ({text})")
+        )
+        assert by_row._row_able and not by_tick._row_able
+        records = _states(rng)
+        # A message well after the last: the ticks judged on arrays are judged too (a
+        # state that is not numbers leaves a tick to them).
+        last = records[-1].log_time_ns + 2_000_000_000
+        records.append(TopicRecord("mission/command", {"behavior": "LAND"}, last))
+        whole = SignalBuilder(None)
+        for record in records:
+            for monitor in (by_row, by_tick):
+                monitor.on_topic(record)
+            if by_row.stopped_by is None and record.topic == "vehicle/state":
+                states += 1
+                by_row_states += by_row._state_holds is not None
+            whole.topic(record.topic, record.log_time_ns, record.data)
+        assert by_row.early == by_tick.early, (seed, text)
+        assert by_row.stopped_at_s == by_tick.stopped_at_s
+        stops += by_row.stopped_by is not None
+        mine, theirs = by_row.builder.finish(), whole.finish()
+        assert mine.length == theirs.length
+        assert mine.values.keys() == theirs.values.keys()
+        for name, column in mine.values.items():  # NaN where a state is not numbers
+            assert np.array_equal(column, theirs.values[name], equal_nan=True), name
+    assert 0 < stops < 60  # flights that break it, and flights that keep it
+    assert by_row_states > states / 2  # most states before a stop judged by row
+
+
+def test_a_state_test_is_the_row_value_test() -> None:
+    # `signals.state_test` judges a state before the builder has it: the same floats as
+    # `row_value` on the row the builder makes of that state.
+    import operator
+
+    from aeroexec.properties.signals import ROW_SIGNALS, SignalBuilder, row_value, state_test
+
+    rng = random.Random(7)
+    for _ in range(300):
+        builder = SignalBuilder(None)
+        states = []
+        for tick in range(2):
+            state = {
+                "position": [rng.choice([rng.uniform(-9, 9), 3, True]) for _ in range(3)],
+                "velocity": [rng.choice([rng.uniform(-3, 3), -1, False]) for _ in range(3)],
+                "battery": rng.choice([rng.random(), 1]),
+                "flying": rng.choice([True, False]),
+            }
+            if rng.random() < 0.5:
+                state["armed"] = rng.choice([True, False, 0])
+            if rng.random() < 0.2:
+                state["position"].append(5.5)
+            states.append(state)
+            builder.vehicle_state(tick * 100_000_000, state)
+        first, row = builder._rows[0], builder._rows[-1]
+        for name in sorted(ROW_SIGNALS):
+            bound = rng.choice([0.0, 1.0, rng.uniform(-5, 5)])
+            for op in (operator.le, operator.gt, operator.eq):
+                holds = state_test(name, op, bound, first)
+                expected = op(row_value(name, row, first), bound)
+                assert holds(states[-1]) == expected, (name, states[-1])
+                # Judged again on the same numbers (kept when it held): the same verdict.
+                assert holds(dict(states[-1])) == expected
 
 
 # -- fly --spec, against MavSim (the SITL flight is in test_sitl_flights.py) ----------------

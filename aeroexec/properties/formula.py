@@ -90,6 +90,24 @@ class Formula:
         body = self._always_body
         return None if body is None else semantics.instant(body)
 
+    @cached_property
+    def threshold(self) -> tuple[str, Callable[[float, float], bool], float] | None:
+        """(signal, test, bound) when the body of a top-level `always` is one signal
+        against a number (`always(distance_home <= 50)`, `always(0.05 <= battery)`, the
+        commonest shape of a property that acts): at a sample it holds where
+        `test(value, bound)`, the same verdict as `instant_body` (a NaN fails both). None
+        for any other formula."""
+        body = self._always_body
+        if not isinstance(body, nodes.Compare):
+            return None
+        left, right = body.left, body.right
+        if isinstance(left, nodes.Signal) and isinstance(right, nodes.Constant):
+            return left.name, semantics.TESTS[body.op], float(right.value)
+        if isinstance(left, nodes.Constant) and isinstance(right, nodes.Signal):
+            # `c <= x` is `x >= c`, NaN included (both false).
+            return right.name, semantics.TESTS[_MIRRORED[body.op]], float(left.value)
+        return None
+
     def body_verdicts(self, columns: Mapping[str, Sequence[float]], length: int) -> np.ndarray:
         """The body of a top-level `always`, per sample: > 0 holds, < 0 violated."""
         body = self._always_body
@@ -197,6 +215,9 @@ def compile_formula(
             ) from None
         raise PropertyError(exc.message, place) from None
     return Formula(text, tuple(names), mark, tree, tuple(uses), tuple(read))
+
+
+_MIRRORED = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "==", "!==": "!=="}
 
 
 def _has(node: nodes.Node, test: Callable[[nodes.Node], bool]) -> bool:

@@ -33,7 +33,7 @@ from aeroexec.properties import nodes
 
 Array = np.ndarray
 _INF = float("inf")
-_TESTS: dict[str, Callable[[Array, Array], Array]] = {
+TESTS: dict[str, Callable[[Array | float, Array | float], Array]] = {
     "<": operator.lt,
     "<=": operator.le,
     "==": operator.eq,
@@ -68,10 +68,22 @@ class _Evaluation:
     def constant(self, node: nodes.Constant) -> Array:
         return np.full(self.length, node.value)
 
+    def operands(
+        self, node: nodes.Compare | nodes.Arithmetic
+    ) -> tuple[Array | float, Array | float]:
+        """Both sides; a number against a signal as that number, which numpy broadcasts
+        (the same floats, without an array of it per use: most comparisons are one)."""
+        left, right = node.left, node.right
+        if isinstance(right, nodes.Constant) and not isinstance(left, nodes.Constant):
+            return self.value(left), float(right.value)
+        if isinstance(left, nodes.Constant) and not isinstance(right, nodes.Constant):
+            return float(left.value), self.value(right)
+        return self.value(left), self.value(right)
+
     def compare(self, node: nodes.Compare) -> Array:
-        left, right = self.value(node.left), self.value(node.right)
+        left, right = self.operands(node)
         if self.boolean:
-            return np.where(_TESTS[node.op](left, right), 1.0, -1.0)
+            return np.where(TESTS[node.op](left, right), 1.0, -1.0)
         if node.op == "==":
             return -np.abs(left - right)
         if node.op == "!==":
@@ -82,7 +94,7 @@ class _Evaluation:
 
     # -- arithmetic -------------------------------------------------------------------------------
     def arithmetic(self, node: nodes.Arithmetic) -> Array:
-        left, right = self.value(node.left), self.value(node.right)
+        left, right = self.operands(node)
         if node.op == "+":
             return left + right
         if node.op == "-":
@@ -275,7 +287,7 @@ def _instant_pair(
 ) -> Callable[[Sample], float] | None:
     op = node.op
     if isinstance(node, nodes.Compare):
-        test = _TESTS[op]
+        test = TESTS[op]
         # A signal against a number, the common case (a geofence): one call, not three.
         if isinstance(node.left, nodes.Signal) and isinstance(node.right, nodes.Constant):
             name, bound = node.left.name, float(node.right.value)
