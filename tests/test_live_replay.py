@@ -6,6 +6,8 @@ replay and is recorded as an abort; what a live view cannot show is refused in o
 from __future__ import annotations
 
 import json
+import signal
+import socket
 import subprocess
 import sys
 import time
@@ -202,3 +204,28 @@ def test_live_options_without_live_are_one_line_and_exit_2(
     proc = aeroexec("replay", str(recorded), *args)
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [f"aeroexec replay: error: {message}"]
+
+
+def test_one_signal_ends_a_live_replay_with_its_recording_finished(
+    recorded: Path, tmp_path: Path, procs: list[AeroexecProcess]
+) -> None:
+    replayed = tmp_path / "replayed.mcap"
+    proc = Live(["replay", str(recorded), *live_args(replayed, "--speed", "1")])
+    procs.append(proc)
+    url = proc.url()
+    port = int(url.rsplit(":", 1)[1])
+    client = FoxgloveClient(url).start()
+    wait_for_topic(client, "/drone1/vehicle/state")  # the replay is under way, in real time
+    started = time.monotonic()
+    proc.popen.send_signal(signal.SIGTERM)
+    code, _, err = proc.finish(timeout=10)
+    assert time.monotonic() - started < 2.0
+    assert code == 143, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "interrupted by SIGTERM" in lines[0], err
+    client.wait_closed(10)
+    recording = open_recording(replayed)
+    assert recording.complete
+    assert recording.metadata["aeroexec_end"]["reason"] == "interrupted"
+    with socket.socket() as s, pytest.raises(ConnectionRefusedError):
+        s.connect(("127.0.0.1", port))
