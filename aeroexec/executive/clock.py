@@ -43,50 +43,21 @@ class SimClock:
         return self._now
 
 
-class Pacer:
-    """Keeps a clock's ticks to the wall clock, `speed` times as fast: tick time `now`
-    is due `now / speed` of real time after the first tick (set-up before it is not
-    waited for). Only when each tick runs is paced, never what it computes."""
-
-    def __init__(self, speed: float = 1.0) -> None:
-        if not speed > 0:
-            raise ValueError("speed must be positive")
-        self.speed = speed
-        self._wall_start: int | None = None
-
-    def wait(self, now: int) -> None:
-        """Until tick time `now` (ns) is due."""
-        if self._wall_start is None:
-            self._wall_start = time.monotonic_ns() - round(now / self.speed)
-        delay = self._wall_start + round(now / self.speed) - time.monotonic_ns()
-        if delay > 0:
-            time.sleep(delay / NS_PER_S)
-
-
-class PacedSimClock(SimClock):
-    """Simulated time kept to the wall clock: a tick lasts `tick / speed` of real time
-    (`run --live --speed`), so a viewer sees the flight as it would happen. The session
-    and its recording are those of the unpaced run (`kind` stays "sim")."""
-
-    def __init__(self, tick_ns: int = DEFAULT_TICK_NS, speed: float = 1.0) -> None:
-        super().__init__(tick_ns)
-        self._pacer = Pacer(speed)
-        self.speed = speed
-
-    def advance(self) -> int:
-        now = super().advance()
-        self._pacer.wait(now)
-        return now
-
-
 class Paced:
-    """Any clock that steps by itself (a replay's: simulated, or the recorded ticks of
-    a flight) kept to the wall clock as `PacedSimClock` is (`replay --live --speed`).
-    Everything but `advance` is the clock's own (`kind`, `upcoming_ns`, ...)."""
+    """Any clock that steps by itself (a simulated one, or the recorded ticks of a
+    flight) kept to the wall clock (`run --live --speed`, `replay --live --speed`), so a
+    viewer sees the session as it would happen. The session and its recording are those
+    of the unpaced clock: everything but `advance` is the clock's own (`kind`, ...).
+    Tick time `now` is due `now / speed` of real time after the first tick (set-up
+    before it is not waited for); only when each tick runs is paced, never what it
+    computes."""
 
     def __init__(self, clock: Clock, speed: float = 1.0) -> None:
+        if not speed > 0:
+            raise ValueError("speed must be positive")
         self.clock = clock
-        self._pacer = Pacer(speed)
+        self.speed = speed
+        self._wall_start: int | None = None
 
     @property
     def kind(self) -> str:
@@ -101,7 +72,11 @@ class Paced:
 
     def advance(self) -> int:
         now = self.clock.advance()
-        self._pacer.wait(now)
+        if self._wall_start is None:
+            self._wall_start = time.monotonic_ns() - round(now / self.speed)
+        delay = self._wall_start + round(now / self.speed) - time.monotonic_ns()
+        if delay > 0:
+            time.sleep(delay / NS_PER_S)
         return now
 
     def __getattr__(self, name: str) -> object:

@@ -20,7 +20,7 @@ from aeroexec.catalog.model import Catalog
 from aeroexec.catalog.paths import DEFAULT_CATALOG
 from aeroexec.executive.behavior import Behavior
 from aeroexec.executive.bus import BusObserver
-from aeroexec.executive.clock import NS_PER_S, PacedSimClock, SimClock
+from aeroexec.executive.clock import NS_PER_S, SimClock, paced
 from aeroexec.executive.executive import Executive
 from aeroexec.inputs import read_text
 from aeroexec.interrupts import Interrupted
@@ -283,7 +283,7 @@ def simulate(
         executive = Executive(
             catalog,
             vehicle=vehicle,
-            clock=SimClock() if config.speed is None else PacedSimClock(speed=config.speed),
+            clock=paced(SimClock(), config.speed),
             library=code.library,
             observers=all_observers,
             drone=config.drone,
