@@ -240,9 +240,10 @@ def replay_recording(
     span_ms = max(1, ((run.outcome.end_ns or 0) - (run.outcome.start_ns or 0)) // 1_000_000)
     bar = progress(f"replaying {Path(name).name}", span_ms) if progress else nullcontext(None)
     with bar as advance:
+        timer = ReplayedTime(advance, span_ms) if advance is not None else None
         watchers: list[BusObserver] = list(watch.observers)
-        if advance is not None:
-            watchers.insert(0, ReplayedTime(advance, span_ms))
+        if timer is not None:
+            watchers.insert(0, timer)
         live = {"tap": watch.tap, "speed": options.speed}
         if mode is Mode.closed:
             mission = load_mission(options.mission) if options.mission is not None else None
@@ -270,9 +271,8 @@ def replay_recording(
             replayed, how = replay_open(
                 path, run, catalog, behaviors, options.output, horizon, watchers, **live
             )
-        for watcher in watchers:
-            if isinstance(watcher, ReplayedTime):
-                watcher.finish()
+        if timer is not None:
+            timer.finish()
     notes.extend(how)
     notes.extend(_never_struck(injected, replayed))
     changed = code_changes(run.code, code_manifest(behaviors, catalog.catalog).metadata())
