@@ -120,9 +120,10 @@ def listening(port: int) -> bool:
 
 
 @pytest.fixture(scope="module")
-def cluster() -> Iterator[tuple[str, dict[str, str]]]:
+def cluster() -> Iterator[tuple[str, dict[str, str], Path]]:
     """`ray start --head` (2 CPUs, token authentication) in its own process group, and
-    what a client needs: the ray:// address and the environment with the token."""
+    what a client needs: the ray:// address and the environment with the token; and the
+    head's temporary folder (its logs)."""
     pytest.importorskip("ray", reason="Ray is not installed (pip install 'aeroexec[ray]')")
     if not (BIN / "ray").exists():
         pytest.skip(f"no `ray` command beside {sys.executable}")
@@ -158,7 +159,7 @@ def cluster() -> Iterator[tuple[str, dict[str, str]]]:
             pytest.fail("the Ray head did not open its client port within 120 s")
         if head.poll() is not None:
             pytest.fail(f"`ray start --head` exited with {head.returncode}")
-        yield f"ray://127.0.0.1:{client_port}", env
+        yield f"ray://127.0.0.1:{client_port}", env, Path(temp)
     finally:
         head.send_signal(signal.SIGTERM)  # `ray start --block` stops what it started
         try:
@@ -170,10 +171,17 @@ def cluster() -> Iterator[tuple[str, dict[str, str]]]:
         shutil.rmtree(temp, ignore_errors=True)
 
 
+def client_server_logs(temp: Path) -> str:
+    """The head's Ray Client server logs, for a failure's message (Ray says only that
+    the server "failed", and the folder is gone once the test ends)."""
+    logs = sorted(temp.glob("session_*/logs/ray_client_server*"))
+    return "".join(f"\n--- {log.name}\n{log.read_text(errors='replace')[-1500:]}" for log in logs)
+
+
 def test_a_ray_cluster_gives_the_verdicts_of_one_process(
-    corpus: Corpus, http: Server, cluster: tuple[str, dict[str, str]]
+    corpus: Corpus, http: Server, cluster: tuple[str, dict[str, str], Path]
 ) -> None:
-    address, env = cluster
+    address, env, temp = cluster
     over_http = f"{http.url}/{corpus.directory.name}/{Path(corpus.files[2]).name}"
     as_file_url = f"file://{corpus.files[3]}"
     inputs = [*corpus.files[:2], over_http, as_file_url, *corpus.files[4:]]
@@ -185,7 +193,7 @@ def test_a_ray_cluster_gives_the_verdicts_of_one_process(
         text=True,
         timeout=300,
     )
-    assert done.stdout == local[1], done.stderr[-2000:]
+    assert done.stdout == local[1], done.stderr[-2000:] + client_server_logs(temp)
     assert done.returncode == local[0] == 2  # the corpus's planted broken files
     assert [r["recording"] for r in rows(done.stdout)] == inputs
     assert "Traceback" not in done.stderr
