@@ -455,3 +455,55 @@ def test_fly_wait_viewer_keeps_the_link_while_it_waits(
     assert "link lost" not in out + err
     client.wait_closed()
     assert_parity(client, record)
+
+
+# -- foxglove-sdk's runtime -------------------------------------------------------------------
+THREADS_OF_A_LIVE_VIEW = """\
+import os, sys
+from aeroexec.viz.live import LiveOptions, LiveView
+view = LiveView(LiveOptions(port=0))
+print(len(os.listdir("/proc/self/task")), os.environ.get("TOKIO_WORKER_THREADS"))
+view.close()
+"""
+
+
+def _live_view_threads(tokio_workers: str | None) -> tuple[int, str]:
+    env = {k: v for k, v in os.environ.items() if k != "TOKIO_WORKER_THREADS"}
+    if tokio_workers is not None:
+        env["TOKIO_WORKER_THREADS"] = tokio_workers
+    proc = subprocess.run(
+        [sys.executable, "-c", THREADS_OF_A_LIVE_VIEW],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
+    assert proc.returncode == 0, proc.stderr
+    threads, left = proc.stdout.split()
+    return int(threads), left
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="threads counted in /proc")
+def test_the_server_runs_on_one_worker_thread_unless_the_user_says_otherwise() -> None:
+    # One worker: a second is woken to steal each burst's sends (benchmarks/live.py).
+    ours, left = _live_view_threads(None)
+    theirs, kept = _live_view_threads("3")
+    assert theirs - ours == 2  # the user's three workers, against our one
+    assert left == "None"  # not left for the mission's child processes to inherit
+    assert kept == "3"
+
+
+def test_a_worker_count_the_runtime_cannot_read_is_one_line_and_exit_2() -> None:
+    # Tokio would panic inside the SDK, with a Rust backtrace.
+    proc = subprocess.run(
+        [sys.executable, "-m", "aeroexec", "run", str(APPENDIX_C), "--live", "--port", "0"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env={**os.environ, "TOKIO_WORKER_THREADS": "two"},
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        "aeroexec run: error: TOKIO_WORKER_THREADS='two' (the live servers' worker threads) "
+        "is not a whole number above 0"
+    ]
