@@ -96,6 +96,8 @@ class Figure:
         def shown(x: float) -> str:
             if self.unit == "s":
                 return f"{x * 1000:.1f} ms" if x < 10 else f"{x:.2f} s"
+            if self.unit == " %" and abs(x) < 10:
+                return f"{x:.2f}{self.unit}"
             return f"{x:,.0f}{self.unit}"
 
         if self.kind == "ratio":
