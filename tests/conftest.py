@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 
 import pytest
 from hypothesis import settings
+from live_helpers import AeroexecProcess
 
 from aeroexec.catalog import THESIS_CATALOG, Catalog, load_catalog
 
@@ -21,3 +23,13 @@ settings.load_profile("random" if os.environ.get("AEROEXEC_HYPOTHESIS_RANDOM") e
 def thesis_catalog() -> Catalog:
     """The thesis' Appendix A catalog, loaded strictly (read-only: Catalog is frozen)."""
     return load_catalog(THESIS_CATALOG)
+
+
+@pytest.fixture
+def procs() -> Iterator[list[AeroexecProcess]]:
+    """`aeroexec` subprocesses a test starts (the live tests): killed after it, whatever
+    it asserted. A module with processes of another kind defines its own."""
+    started: list[AeroexecProcess] = []
+    yield started
+    for proc in started:
+        proc.kill()

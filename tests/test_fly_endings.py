@@ -14,6 +14,7 @@ import sys
 import threading
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,7 @@ from live_helpers import (
     write_mission,
 )
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
-from typer.testing import CliRunner
+from typer.testing import CliRunner, Result
 
 from aeroexec.cli import app
 from aeroexec.executive.bus import MemoryObserver, TopicRecord
@@ -431,6 +432,27 @@ def test_a_hold_the_autopilot_does_not_show_is_not_reported_held(tmp_path: Path)
     )
 
 
+@dataclass(frozen=True)
+class Flown:
+    """What `fly_on_mavsim` saw: the command's result, and the simulated vehicle as the
+    command left it."""
+
+    result: Result
+    final: dict[str, Any]
+    velocity_setpoints: int
+
+
+def fly_on_mavsim(mission: Path, *args: str, **sim: Any) -> Flown:
+    """`aeroexec fly MISSION --connect ... ARGS`, in this process, against mavsim in a
+    thread over UDP (`sim`: mavsim_thread's options: its kind, refusals, speed-up)."""
+    port = free_udp_port()
+    with mavsim_thread(f"udpout:127.0.0.1:{port}", **sim) as simulator:
+        result = CliRunner().invoke(
+            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", *args]
+        )
+        return Flown(result, simulator.stats()["final"], simulator.counters.setpoints["velocity"])
+
+
 class AcceptsLandButStaysGuided(MavSim):
     """An autopilot that acknowledges LAND and goes on hovering in GUIDED (as one whose
     mode change another GCS or a failing mode check overrides would look)."""
@@ -446,13 +468,8 @@ def test_a_land_the_autopilot_acknowledges_but_does_not_show_is_not_reported(
 ) -> None:
     """Issue 24.1: an ending is reported from the autopilot's HEARTBEAT, not from its
     COMMAND_ACK; LAND not seen within the bound is said so, and fly exits 1."""
-    port = free_udp_port()
-    mission = write_mission(tmp_path, AIRBORNE)
-    with mavsim_thread(f"udpout:127.0.0.1:{port}", kind=AcceptsLandButStaysGuided) as sim:
-        result = CliRunner().invoke(
-            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
-        )
-        final = sim.stats()["final"]
+    flown = fly_on_mavsim(write_mission(tmp_path, AIRBORNE), kind=AcceptsLandButStaysGuided)
+    result, final = flown.result, flown.final
     assert result.exit_code == 1, result.output
     assert "ending: switched to LAND: NOT seen in LAND within 5 s" in result.stdout
     assert "seen in LAND " not in result.stdout.replace("NOT seen in LAND", "")
@@ -498,15 +515,10 @@ def test_a_land_seen_but_never_seen_down_is_not_reported_landed(tmp_path: Path) 
     (EXTENDED_SYS_STATE, HEARTBEAT) within the landing's bound (20 s + 4 s per metre of
     height + 1 s per metre from home: 25 s here, on fly's wall clock, which mavsim's
     speed-up does not shorten); not seen, fly says so, exits 1 and records it."""
-    port = free_udp_port()
     record = tmp_path / "flight.mcap"
     mission = write_mission(tmp_path, AIRBORNE)
-    with mavsim_thread(f"udpout:127.0.0.1:{port}", kind=ShowsLandButNeverComesDown) as sim:
-        result = CliRunner().invoke(
-            app,
-            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
-        )
-        final = sim.stats()["final"]
+    flown = fly_on_mavsim(mission, "-o", str(record), kind=ShowsLandButNeverComesDown)
+    result, final = flown.result, flown.final
     assert final["mode"] == "LAND" and final["flying"] and final["armed"]  # as it misbehaves
     assert result.exit_code == 1, result.output
     assert re.search(r"ending: switched to LAND: seen in LAND \d+\.\d s later\n", result.stdout)
@@ -564,22 +576,14 @@ def test_a_hold_never_seen_to_stop_is_not_reported_held(tmp_path: Path) -> None:
     """Issue 24.1: a zero-velocity setpoint is never acknowledged, so only the autopilot's
     velocity shows a hold. It stays at 1 m/s: fly says it was NOT seen holding, exits 1
     and records it."""
-    port = free_udp_port()
     record = tmp_path / "flight.mcap"
     mission = write_mission(tmp_path, LEG_THEN_RETURN)
-    with mavsim_thread(
-        f"udpout:127.0.0.1:{port}", kind=DriftsOnWhenBraked, speed_factor=1.0
-    ) as sim:
-        result = CliRunner().invoke(
-            app,
-            [
-                *("fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"),
-                *("--on-exit", "hold", "-o", str(record)),
-            ],
-        )
-        final = sim.stats()["final"]
+    flown = fly_on_mavsim(
+        mission, "--on-exit", "hold", "-o", str(record), kind=DriftsOnWhenBraked, speed_factor=1.0
+    )
+    result, final = flown.result, flown.final
     assert final["mode"] == "GUIDED" and final["flying"]
-    assert sim.counters.setpoints["velocity"] >= 2  # braked, and braked again
+    assert flown.velocity_setpoints >= 2  # braked, and braked again
     assert result.exit_code == 1, result.output
     moving = STILL_MOVING.format(mode="GUIDED")
     assert re.search(f"ending: braked: NOT seen holding: {moving}\n", result.stdout), result.stdout
@@ -599,17 +603,10 @@ def test_a_brake_before_landing_never_seen_to_stop_fails_the_landing(tmp_path: P
     LAND so that it lands where it stopped. It never stops: fly lands it all the same
     (the safest thing left) but says the brake was NOT seen, exits 1 although the vehicle
     came down, and records it."""
-    port = free_udp_port()
     record = tmp_path / "flight.mcap"
     mission = write_mission(tmp_path, LEG_THEN_RETURN)
-    with mavsim_thread(
-        f"udpout:127.0.0.1:{port}", kind=DriftsOnWhenBraked, speed_factor=1.0
-    ) as sim:
-        result = CliRunner().invoke(
-            app,
-            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
-        )
-        final = sim.stats()["final"]
+    flown = fly_on_mavsim(mission, "-o", str(record), kind=DriftsOnWhenBraked, speed_factor=1.0)
+    result, final = flown.result, flown.final
     assert final["mode"] == "LAND" and not final["flying"] and not final["armed"]
     assert result.exit_code == 1, result.output
     moving = STILL_MOVING.format(mode="BRAKE")
@@ -695,13 +692,8 @@ def test_a_vehicle_left_armed_on_the_ground_is_disarmed_as_seen(tmp_path: Path) 
     """The ending disarms a vehicle left armed on the ground and says so from a HEARTBEAT
     heard after the disarm. It used to leave it armed: the ending came before the first
     HEARTBEAT after the arm, and the one before it (disarmed) counted as down."""
-    port = free_udp_port()
-    mission = write_mission(tmp_path, TAKE_OFF_ONLY)
-    with mavsim_thread(f"udpout:127.0.0.1:{port}", refuse=REFUSED_TAKE_OFF) as sim:
-        result = CliRunner().invoke(
-            app, ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}"]
-        )
-        final = sim.stats()["final"]
+    flown = fly_on_mavsim(write_mission(tmp_path, TAKE_OFF_ONLY), refuse=REFUSED_TAKE_OFF)
+    result, final = flown.result, flown.final
     assert not final["armed"] and not final["flying"]
     assert result.exit_code == 1, result.output  # the take-off failed
     lines = [line for line in result.stdout.splitlines() if line.startswith("ending: ")]
@@ -723,17 +715,12 @@ class AcksDisarmButStaysArmed(MavSim):
 def test_a_disarm_acknowledged_but_never_seen_is_not_reported_disarmed(tmp_path: Path) -> None:
     """Issue 24.1: the disarm's COMMAND_ACK is not a disarm; not seen in a HEARTBEAT within
     20 s (the bound of a disarm on the ground), fly says so and records it."""
-    port = free_udp_port()
     record = tmp_path / "flight.mcap"
     mission = write_mission(tmp_path, TAKE_OFF_ONLY)
-    with mavsim_thread(
-        f"udpout:127.0.0.1:{port}", kind=AcksDisarmButStaysArmed, refuse=REFUSED_TAKE_OFF
-    ) as sim:
-        result = CliRunner().invoke(
-            app,
-            ["fly", str(mission), "--connect", f"udpin:127.0.0.1:{port}", "-o", str(record)],
-        )
-        final = sim.stats()["final"]
+    flown = fly_on_mavsim(
+        mission, "-o", str(record), kind=AcksDisarmButStaysArmed, refuse=REFUSED_TAKE_OFF
+    )
+    result, final = flown.result, flown.final
     assert final["armed"] and not final["flying"]  # as it misbehaves
     assert result.exit_code == 1, result.output
     assert "ending: NOT seen disarmed within 20 s: on the ground, armed\n" in result.stdout

@@ -66,14 +66,6 @@ class Live(AeroexecProcess):
         return self.urls()[1]
 
 
-@pytest.fixture
-def procs() -> Any:
-    started: list[AeroexecProcess] = []
-    yield started
-    for proc in started:
-        proc.kill()
-
-
 def recorded_messages(record: Path) -> list[tuple[str, int, bytes]]:
     recording = open_recording(record)
     assert recording.complete

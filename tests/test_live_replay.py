@@ -12,7 +12,6 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import pytest
 from foxglove_client import FoxgloveClient
@@ -46,14 +45,6 @@ def wait_for_topic(client: FoxgloveClient, topic: str, timeout: float = 60.0) ->
     while not any(m.topic == topic for m in list(client.messages)):
         assert time.monotonic() < deadline, f"nothing on {topic}"
         time.sleep(0.05)
-
-
-@pytest.fixture
-def procs() -> Any:
-    started: list[AeroexecProcess] = []
-    yield started
-    for proc in started:
-        proc.kill()
 
 
 @pytest.mark.parametrize(
