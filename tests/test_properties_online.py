@@ -321,8 +321,9 @@ def test_a_state_test_is_the_row_value_test() -> None:
             if rng.random() < 0.2:
                 state["position"].append(5.5)
             states.append(state)
-            builder.vehicle_state(tick * 100_000_000, state)
-        first, row = builder._rows[0], builder._rows[-1]
+            assert builder.vehicle_state(tick * 100_000_000, state)
+        first, row = builder.home_row, builder.last_row
+        assert first is not None and row is not None
         for name in sorted(ROW_SIGNALS):
             bound = rng.choice([0.0, 1.0, rng.uniform(-5, 5)])
             for op in (operator.le, operator.gt, operator.eq):

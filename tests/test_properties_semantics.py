@@ -335,3 +335,20 @@ def test_only_bodies_of_the_present_sample_are_judged_one_sample_at_a_time() -> 
     assert at is not None
     with pytest.raises(ZeroDivisionError):  # numpy: inf; the monitor judges it on arrays
         at({"altitude": 1.0, "speed": 0.0})
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_a_propertys_robustness_is_its_series_at_the_start(seed: int) -> None:
+    # `evaluate` reads a property's robustness with `at_start`, which reduces the
+    # operand of a whole-trace operator at the top instead of building its series: the
+    # same float, NaN (a signal that is no number) included.
+    rng = random.Random(seed)
+    data = {name: values + 0.1 for name, values in columns(seed).items()}
+    if seed % 3 == 0:
+        data["speed"][rng.randrange(LENGTH)] = np.nan
+    for top in ("always", "eventually", "historically", "once", "always[0:0.5]", ""):
+        text = f"{top}({boolean(rng, 2)})" if top else boolean(rng, 2)
+        node = compile_formula(text, Mark("t.yaml"), is_known_signal).tree
+        whole = semantics.series(node, data, LENGTH)[0]
+        start = semantics.at_start(node, data, LENGTH)
+        assert start == whole or (np.isnan(start) and np.isnan(whole)), text

@@ -125,8 +125,7 @@ class Formula:
     def evaluate(self, columns: Mapping[str, Sequence[float]], length: int) -> Outcome:
         """Evaluate on `length` samples of every signal in `signals`."""
         arrays = self._arrays(columns)
-        robustness = semantics.series(self.tree, arrays, length)
-        rob = float(robustness[0]) if length else 0.0
+        rob = semantics.at_start(self.tree, arrays, length) if length else 0.0
         if rob > 0 and self._sound:
             # A positive robustness is a satisfaction (STL's soundness): the Boolean pass
             # would say the same.

@@ -13,11 +13,13 @@ tick they fall in.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import struct
+from array import array
 from bisect import bisect_right
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -134,6 +136,8 @@ ROW_SIGNALS = frozenset(_ROW_SIGNALS)
 #: values as the message had them (made floats, or dropped, at the end).
 Row = tuple[Any, ...]
 ROW_LENGTH = 10
+#: A row as the table keeps it (`SignalBuilder._pack`): its values as doubles.
+_PACK_ROW = struct.Struct(f"{ROW_LENGTH}d").pack
 #: The row signals that are a column of the row as it is (the others are computed).
 ROW_COLUMNS = {"altitude": 3, "battery": 7, "flying": 8, "armed": 9}
 
@@ -252,13 +256,6 @@ def _row_of(k: int, data: dict[str, Any]) -> Row:
     )
 
 
-_PLAIN = frozenset({int, float, bool})
-
-
-def _numeric(row: tuple[Any, ...]) -> bool:
-    return set(map(type, row)) <= _PLAIN or all(isinstance(v, (int, float)) for v in row)
-
-
 def is_known_signal(name: str) -> bool:
     return any(name == s.name for s in SIGNALS) or any(
         name.startswith(prefix) and len(name) > len(prefix) for prefix in FAMILIES
@@ -335,21 +332,28 @@ class SignalBuilder:
         self._pulses: dict[str, list[int]] = {}
         self._sources: set[str] = set()
         self._last = -1
-        self._home: tuple[float, float] | None = None
         self._active: frozenset[str] = frozenset()
         self._capabilities: frozenset[str] = frozenset()
         self._recurrent: dict[str, bool] = {}
         self._pending: dict[int, str] = {}
         self._answered: set[int] = set()
-        #: One row per vehicle state (`vehicle_state`).
-        self._rows: list[Row] = []
+        #: The vehicle states' rows that are numbers (`vehicle_state`), packed: ROW_LENGTH
+        #: doubles each. Packed, not kept as tuples: a tuple would keep the state's float
+        #: objects alive, a few MB of an hour's session that the allocator then cannot
+        #: reuse (measured: most of what monitoring cost in a session beyond its own
+        #: work), and the columns are a copy away instead of a conversion.
+        self._table = array("d")
+        self._add_row = self._table.frombytes
+        #: The first state's row (home); the last one's when it was odd (`_odd_state`),
+        #: else it is the table's last; whether they are numbers (in the table).
+        self._first_row: Row | None = None
+        self._last_row: Row | None = None
+        self._first_numeric = False
+        self._last_numeric = False
         self._last_fault: Any = None
         #: vehicle/state fields some state had only as an importer's default.
         self._defaulted: set[str] = set()
         self._faults: set[str] = set()
-        #: The last row `latest` found to be numbers (each row is checked once).
-        self._checked_row: tuple[Any, ...] | None = None
-        self._home_numeric: bool | None = None
 
     # -- input ------------------------------------------------------------------------------
     def use_catalog(self, conflicts: Callable[[str], Iterable[str]]) -> None:
@@ -438,7 +442,7 @@ class SignalBuilder:
     @property
     def home_row(self) -> Row | None:
         """The first vehicle state's row (home, for `distance_home`), None before one."""
-        return self._rows[0] if self._rows else None
+        return self._first_row
 
     def finish(self, start: int = 0, *, final: bool = True) -> Signals:
         """The samples from `start` to the last one. `final`: the session has ended (the
@@ -452,17 +456,17 @@ class SignalBuilder:
             # A count or a 0/1 flag is 0 until its first change.
             index = np.searchsorted(at, samples, side="right") - 1
             values[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
-        if self._rows and length:
+        first_row = self._first_row
+        if self._table and length and first_row is not None:
             # The last state of each tick counts; before the first, the first (a vehicle
             # signal is known from the session's start).
-            first_row = bisect_right(self._rows, (start, math.inf)) - 1
-            rows = self._row_array(max(first_row, 0))
+            rows = self._table_from(start)
             index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
             held = rows[index]
             for name in _ROW_SIGNALS:
                 if not self._guessed(name):
-                    values[name] = _vehicle_column(name, held, self._rows[0])
-            first_k = int(self._rows[0][0])
+                    values[name] = _vehicle_column(name, held, first_row)
+            first_k = int(first_row[0])
             for name in ("link", "grounded"):
                 if name in values and first_k >= start:
                     # Known from the first state: its value holds before it too.
@@ -504,7 +508,7 @@ class SignalBuilder:
                     row = self._numeric_last_row()
                     if row is None:
                         return None
-                values[name] = row_value(name, row, self._rows[0])
+                values[name] = row_value(name, row, self._first_row)  # type: ignore[arg-type]
             elif name in current:
                 values[name] = current[name]
             elif name in self._pulses:
@@ -518,20 +522,20 @@ class SignalBuilder:
                 return None
         return values
 
-    def _numeric_last_row(self) -> tuple[Any, ...] | None:
+    @property
+    def last_row(self) -> Row | None:
+        """The last vehicle state's row (a state of numbers: as the table holds it,
+        floats), None before one."""
+        if self._last_row is None and self._table:
+            return tuple(self._table[-ROW_LENGTH:])
+        return self._last_row
+
+    def _numeric_last_row(self) -> Row | None:
         """The last state row, when it and the first (home) are rows of numbers (a row
         that is not is dropped offline: its tick holds an earlier one); else None."""
-        rows = self._rows
-        if not rows:
+        if not (self._last_numeric and self._first_numeric):
             return None
-        row = rows[-1]
-        if row is not self._checked_row:
-            if self._home_numeric is None:  # the first row never changes: checked once
-                self._home_numeric = _numeric(rows[0])
-            if not (self._home_numeric and _numeric(row)):
-                return None
-            self._checked_row = row
-        return row
+        return self.last_row
 
     def window(
         self, start: int, names: Iterable[str], end: int | None = None
@@ -551,14 +555,13 @@ class SignalBuilder:
             if self._guessed(name):
                 return None
             if name in _ROW_SIGNALS:
-                if not self._rows:
+                if not self._table or self._first_row is None:
                     return None
                 if rows is None:
-                    first = max(bisect_right(self._rows, (start, math.inf)) - 1, 0)
-                    part = self._row_array(first)
+                    part = self._table_from(start)
                     at = np.searchsorted(part[:, 0], samples, side="right") - 1
                     rows = part[np.maximum(at, 0)]
-                out[name] = _vehicle_column(name, rows, self._rows[0])
+                out[name] = _vehicle_column(name, rows, self._first_row)
             elif changes is not None:
                 first = max(bisect_right(changes, (start, math.inf)) - 1, 0)
                 part = changes[first:]
@@ -566,7 +569,7 @@ class SignalBuilder:
                 column = np.array([v for _, v in part])
                 index = np.searchsorted(at, samples, side="right") - 1
                 out[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
-                first_k = int(self._rows[0][0]) if self._rows else -1
+                first_k = int(self._first_row[0]) if self._first_row is not None else -1
                 if name in ("link", "grounded") and start <= first_k < self._last + 1:
                     # Known from the first state: its value holds before it too.
                     out[name][: first_k - start] = out[name][first_k - start]
@@ -610,41 +613,36 @@ class SignalBuilder:
         held = self._capabilities
         return any(other in held for name in held for other in self._conflicts(name))
 
-    def vehicle_state(self, t_ns: int, data: Any) -> Row | None:
+    def vehicle_state(self, t_ns: int, data: Any) -> bool:
         """A `vehicle/state` message (what `topic` does with one), in one call: the hot
-        path online, a state per tick. Returns the state's row (`Row`) as kept, or None
-        when the state is no sample (malformed). The columns are made, and the values
-        checked, at the end; faults, rare, are changes."""
+        path online, a state per tick. Returns whether the state is a sample (False: it
+        is malformed). The columns are made, and the values checked, at the end; faults,
+        rare, are changes."""
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
         try:
-            # Unpacked, not indexed: a third of the work a tick (a position or velocity
-            # of another length than 3 takes the way below).
-            row = (
-                k,
-                *data["position"],
-                *data["velocity"],
-                data["battery"],
-                data["flying"],
-                data.get("armed", False),
+            # A state of numbers, each field as long as it should be, straight into the
+            # table: no row of Python objects is kept (the others take `_odd_state`).
+            x, y, z = data["position"]
+            vx, vy, vz = data["velocity"]
+            battery = data["battery"]
+            self._add_row(
+                _PACK_ROW(k, x, y, z, vx, vy, vz, battery, data["flying"], data.get("armed", False))
             )
-            if len(row) != ROW_LENGTH:
-                row = _row_of(k, data)
-            # A velocity that is no numbers makes no sample (its square is the speed).
-            0.0 + row[4] + row[5] + row[6]
-            low = row[7] < LOW_BATTERY_LEVEL
+            self._last_row = None
+            self._last_numeric = True
+            low = battery < LOW_BATTERY_LEVEL
             fault = data.get("fault") or ""
-        except (KeyError, IndexError, TypeError, AttributeError):
-            # A malformed state is no sample (the channel is still there); no mapping at
-            # all, not even a message of it.
-            if isinstance(data, dict):
-                self._sources.add("vehicle/state")
-            return None
-        rows = self._rows
-        if not rows:
+        except (struct.error, ValueError, LookupError, TypeError, AttributeError):
+            odd = self._odd_state(k, data)
+            if odd is None:
+                return False
+            low, fault = odd
+        if self._first_row is None:
             self._sources.add("vehicle/state")
-        rows.append(row)
+            self._first_row = self._last_row or tuple(self._table[-ROW_LENGTH:])
+            self._first_numeric = self._last_numeric
         if "defaulted" in data:  # a bag's import filled these in: not the vehicle's word
             defaulted = data["defaulted"]
             if defaulted:
@@ -658,19 +656,48 @@ class SignalBuilder:
             if kind:
                 self._fault(k, kind)
             self._set(k, "grounded", float(bool(self._faults & set(GROUNDING_FAULTS))))
-        return row
+        return True
 
-    def _row_array(self, first: int = 0) -> np.ndarray:
-        """The state rows from index `first` as floats (speed from its square); a row with
-        a value that is no number is dropped."""
-        rows = self._rows[first:] if first else self._rows
+    def _odd_state(self, k: int, data: Any) -> tuple[bool, Any] | None:
+        """A state the table did not take as it came: a position or velocity longer than
+        3 (their first three count), values that are not numbers, or no state at all.
+        Returns (low battery, fault) for a sample, None for a malformed state (no
+        sample; the channel is still there, unless it is no mapping at all)."""
         try:
-            # As np.array(rows, dtype=float) makes it (None as NaN), in a third less time.
-            flat = np.fromiter(chain.from_iterable(rows), float, ROW_LENGTH * len(rows))
-            table = flat.reshape(-1, ROW_LENGTH)
-        except (TypeError, ValueError):
-            numeric = [r for r in rows if _numeric(r)]
-            table = np.array(numeric, dtype=float).reshape(-1, ROW_LENGTH)
+            row = _row_of(k, data)
+            # A velocity that is no numbers makes no sample (its square is the speed).
+            0.0 + row[4] + row[5] + row[6]
+            low = row[7] < LOW_BATTERY_LEVEL
+            fault = data.get("fault") or ""
+        except (KeyError, IndexError, TypeError, AttributeError):
+            if isinstance(data, dict):
+                self._sources.add("vehicle/state")
+            return None
+        self._last_row = row
+        self._last_numeric = self._pack(row)
+        return low, fault
+
+    def _pack(self, row: Row) -> bool:
+        """Add `row` to the table; True when its values are all numbers. A null is kept
+        as NaN (a position of nulls is unknown, not absent); a row with a value that is
+        no number otherwise (text, an integer beyond a float) is left out, as a whole."""
+        try:
+            self._add_row(_PACK_ROW(*row))
+            return True
+        except struct.error:
+            pass
+        with contextlib.suppress(struct.error):
+            self._add_row(_PACK_ROW(*[math.nan if value is None else value for value in row]))
+        return False
+
+    def _table_from(self, start: int) -> np.ndarray:
+        """The numeric state rows from the last one at or before sample `start` (the
+        first, when none is) as floats, with the speed (from the velocity) in column 4:
+        a copy, so the table can grow on."""
+        packed = np.frombuffer(self._table, dtype=float).reshape(-1, ROW_LENGTH)
+        first = max(int(np.searchsorted(packed[:, 0], start, side="right")) - 1, 0)
+        table = packed[first:].copy()
+        del packed  # the table is exported while a view of it lives: it could not grow
         vx, vy, vz = table[:, 4], table[:, 5], table[:, 6]
         table[:, 4] = np.sqrt(vx * vx + vy * vy + vz * vz)
         return table
