@@ -216,6 +216,9 @@ def _states(rng: random.Random) -> list:
             position.append(7.0)  # longer than 3
         elif odd < 0.12:
             data["battery"] = "low"
+        elif odd < 0.14:  # text of a number is no number either (the builder drops it)
+            data[rng.choice(["battery", "flying", "armed"])] = "0.9"
+            position[2] = rng.choice([position[2], "4"])
         records.append(TopicRecord("vehicle/state", data, t_ns))
         if rng.random() < 0.08:
             # Beyond the fence, then (mostly) back inside within the same tick.
