@@ -476,6 +476,25 @@ def test_transform_only_when_the_pose_changed(tmp_path: Path) -> None:
     assert [t["translation"]["x"] for t in transforms] == [0, 0, 1]
 
 
+def test_no_transform_for_a_pose_that_is_not_finite(tmp_path: Path) -> None:
+    # JSON has no inf or NaN, and a FrameTransform of nulls is refused by the viewers: a
+    # state whose position or yaw is not finite is recorded, without a transform; huge
+    # but finite values still give one.
+    path = tmp_path / "odd.mcap"
+    inf, nan = float("inf"), float("nan")
+    poses = [([0, 0, 1], 0.0), ([inf, 0, 1], 0.0), ([0, -inf, 1], 0.0), ([0, 0, nan], 0.0)]
+    poses += [([0, 0, 1], inf), ([1e308, -1e308, 1e308], 3.0), ([0, 0, 2], 0.0)]
+    with Recorder(path) as recorder:
+        for tick, (position, yaw) in enumerate(poses):
+            state = {"position": position, "velocity": [0, 0, 0], "yaw": yaw, "battery": 1.0}
+            recorder.on_topic(TopicRecord("vehicle/state", state, tick * 10**8))
+    decoded = _by_topic(path)
+    assert len(decoded["/drone1/vehicle/state"]) == 7
+    transforms = decoded["/drone1/vehicle/transform"]
+    assert [t["timestamp"]["nsec"] for t in transforms] == [0, 5 * 10**8, 6 * 10**8]
+    assert [t["translation"]["x"] for t in transforms] == [0, 1e308, 0]
+
+
 def test_header_metadata_and_attachments_are_on_disk_before_any_message(tmp_path: Path) -> None:
     path = tmp_path / "early.mcap"
     recorder = Recorder(path, metadata={"seed": 3}, attachments={"mission.py": "x = 1\n"})

@@ -76,7 +76,6 @@ def stamp(log_time_ns: int) -> dict[str, int]:
 # -- the frame tree --------------------------------------------------------------------------
 # A transform goes with every vehicle state whose pose changed (a third of a flying
 # session's ticks): built with few calls, from locally bound functions.
-_isfinite = math.isfinite
 _sin = math.sin
 _cos = math.cos
 
@@ -85,7 +84,9 @@ def transform(
     x: float, y: float, z: float, yaw: float, log_time_ns: int, child_frame: str
 ) -> dict[str, Any] | None:
     """A `foxglove.FrameTransform` world -> `child_frame` (None if a value is not finite)."""
-    if not (_isfinite(x) and _isfinite(y) and _isfinite(z) and _isfinite(yaw)):
+    # x - x is 0.0 for a finite x, NaN for an infinite or NaN one: one test for all four,
+    # without a call each (a transform goes with a third of the states).
+    if (x - x) + (y - y) + (z - z) + (yaw - yaw) != 0.0:
         return None
     sec, nsec = divmod(log_time_ns if log_time_ns > 0 else 0, _NS)
     half = yaw / 2
@@ -281,6 +282,10 @@ Emit = Callable[[str, int, dict[str, Any]], None]
 Pose = tuple[float, float, float, float]
 
 
+#: The pose before the first: unequal to any a state holds (None included).
+_UNSEEN = object()
+
+
 class PanelFeed:
     """Derives the panels' messages from a session's own, in log-time order, and hands
     each to `emit` (the recorder writes them; a live stream can publish the same).
@@ -298,7 +303,8 @@ class PanelFeed:
         "_due",
         "_emit",
         "_frame",
-        "_last",
+        "_last_position",
+        "_last_yaw",
         "_moving",
         "_period",
         "_start",
@@ -320,7 +326,8 @@ class PanelFeed:
         self._begun = False
         #: The pose of the last transform sent, as a vehicle/state holds it: a state with
         #: the same pose sends none (Foxglove holds the latest transform).
-        self._last: tuple[Any, Any] | None = None
+        self._last_position: Any = _UNSEEN
+        self._last_yaw: Any = _UNSEEN
         #: While an object moves: how often the scene is sent again, and when next.
         self._period = object_period_ns(world)
         self._moving: MovingObject | None = None
@@ -344,7 +351,7 @@ class PanelFeed:
             x, y, z, yaw = self._start
             frame = transform(x, y, z, yaw, log_time_ns, self._frame)
             if frame is not None:
-                self._last = ([x, y, z], yaw)
+                self._last_position, self._last_yaw = [x, y, z], yaw
                 emit(TRANSFORM_TOPIC, log_time_ns, frame)
 
     def vehicle_state(self, state: Mapping[str, Any], log_time_ns: int) -> None:
@@ -353,9 +360,9 @@ class PanelFeed:
         if not self._begun:
             self.begin(log_time_ns)
         position = state.get("position")
-        pose = (position, state.get("yaw"))
-        if pose != self._last:
-            self._last = pose
+        yaw = state.get("yaw")
+        if position != self._last_position or yaw != self._last_yaw:
+            self._last_position, self._last_yaw = position, yaw
             try:  # the state's pose; none if it has no usable one
                 px, py, pz = position  # type: ignore[misc]
                 frame = transform(
