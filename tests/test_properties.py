@@ -311,6 +311,30 @@ def test_per_name_signals_are_zero_where_the_channel_exists() -> None:
     assert "vehicle/state" in signals.why_missing("altitude")
 
 
+@pytest.mark.parametrize("odd", [{"position": ["a", 0, 1]}, {"battery": "low"}, {"velocity": []}])
+def test_states_none_of_which_is_numbers_leave_vehicle_signals_missing_and_say_why(odd) -> None:
+    # A row with text in it is left out of the columns (a text battery, or no velocity,
+    # makes no sample at all); when every state is so, the vehicle signals are missing,
+    # with that reason: not a traceback, not "no vehicle/state messages".
+    from aeroexec.properties.check import MISSING, evaluate
+    from aeroexec.properties.spec import parse_properties
+
+    builder = SignalBuilder(None)
+    state = {"position": [0, 0, 1], "velocity": [0, 0, 0], "battery": 0.5, "flying": True}
+    for k in range(3):
+        builder.topic("vehicle/state", k * PERIOD_NS, {**state, **odd})
+    signals = builder.finish()
+    assert signals.length == 3
+    assert signals.get("altitude") is None and signals.get("distance_home") is None
+    assert signals.why_missing("altitude") == (
+        "none of the recording's vehicle states is a row of numbers"
+    )
+    props = parse_properties("properties:\n  - {name: c, formula: 'always(altitude <= 9)'}\n", "p")
+    (verdict,) = evaluate(props, signals)
+    assert verdict.status == MISSING
+    assert verdict.missing == (("altitude", signals.why_missing("altitude")),)
+
+
 # -- property files ----------------------------------------------------------------------------
 @pytest.mark.parametrize(
     ("text", "where", "words"),

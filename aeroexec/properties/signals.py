@@ -312,6 +312,8 @@ class Signals:
                     need = source
         if name == "incompatible" and "list_of_active_capabilities" in self.sources:
             return "the recording carries no catalog (catalog.yaml attachment)"
+        if need == "vehicle/state" and need in self.sources:
+            return "none of the recording's vehicle states is a row of numbers"
         return f"the recording has no {need} messages" if need else "unknown signal"
 
 
