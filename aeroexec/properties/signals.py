@@ -132,8 +132,9 @@ _FIELDS_OF: dict[str, tuple[str, ...]] = {
 #: is a function of a state's row alone (and of home, the first), `row_value`.
 _ROW_SIGNALS = ("altitude", "speed", "battery", "flying", "landed", "armed", "distance_home")
 ROW_SIGNALS = frozenset(_ROW_SIGNALS)
-#: A vehicle state as kept: (sample, x, y, z, vx, vy, vz, battery, flying, armed),
-#: values as the message had them (made floats, or dropped, at the end).
+#: A vehicle state's row: (sample, x, y, z, vx, vy, vz, battery, flying, armed), values
+#: as the message had them; kept packed as doubles when they are numbers (a null as NaN),
+#: left out of the columns otherwise (`SignalBuilder._pack`).
 Row = tuple[Any, ...]
 ROW_LENGTH = 10
 #: A row as the table keeps it (`SignalBuilder._pack`): its values as doubles.
@@ -511,7 +512,8 @@ class SignalBuilder:
         known yet at that sample without what later messages say (a vehicle signal
         before the first state, a state that is no row of numbers)."""
         values: dict[str, float] = {}
-        row: tuple[Any, ...] | None = None
+        row: Row | None = None
+        home = self._first_row
         if self._defaulted and any(self._guessed(name) for name in names):
             return None
         current = self._current
@@ -519,9 +521,9 @@ class SignalBuilder:
             if name in ROW_SIGNALS:
                 if row is None:
                     row = self._numeric_last_row()
-                    if row is None:
+                    if row is None or home is None:
                         return None
-                values[name] = row_value(name, row, self._first_row)  # type: ignore[arg-type]
+                values[name] = row_value(name, row, home)
             elif name in current:
                 values[name] = current[name]
             elif name in self._pulses:
