@@ -302,6 +302,15 @@ def main() -> int:
     latency = statistics.median(r[0] for r in runs)
     parity = statistics.median(r[1] for r in runs)
     messages = statistics.median(r[2] for r in runs)
+
+    def cpu_of(variant: str) -> float:
+        return statistics.median(c for c, _, _ in cpu[variant])
+
+    plain = cpu_of("plain")
+
+    def cpu_figure(label: str, value: float) -> Figure:
+        return Figure(label, value, plain, "without --live", COST_TARGET)
+
     figures = [
         Figure(
             f"latency p99, logged to received ({messages:.0f} messages a flight)",
@@ -311,34 +320,21 @@ def main() -> int:
             LATENCY_TARGET_S,
             kind="max",
         ),
-        Figure(
+        cpu_figure(
             "CPU of a real-time flight, --live (the Foxglove server) and a client",
-            statistics.median(c for c, _, _ in cpu["foxglove"]),
-            statistics.median(c for c, _, _ in cpu["plain"]),
-            "without --live",
-            COST_TARGET,
+            cpu_of("foxglove"),
         ),
-        Figure(
+        cpu_figure(
             "CPU of a real-time flight, --live --rerun-port (Foxglove and Rerun)",
-            statistics.median(c for c, _, _ in cpu["both"]),
-            statistics.median(c for c, _, _ in cpu["plain"]),
-            "without --live",
-            COST_TARGET,
+            cpu_of("both"),
         ),
-        Figure(
+        cpu_figure(
             "  the floor: the flight plus foxglove-sdk's sending thread alone, in --live",
-            statistics.median(c for c, _, _ in cpu["plain"])
-            + statistics.median(t for _, _, t in cpu["foxglove"]),
-            statistics.median(c for c, _, _ in cpu["plain"]),
-            "without --live",
-            COST_TARGET,
+            plain + statistics.median(t for _, _, t in cpu["foxglove"]),
         ),
-        Figure(
+        cpu_figure(
             "  the same flight with a bare foxglove-sdk server, fed message by message",
-            statistics.median(c for c, _, _ in cpu["sdk"]),
-            statistics.median(c for c, _, _ in cpu["plain"]),
-            "without --live",
-            COST_TARGET,
+            cpu_of("sdk"),
         ),
         Figure(
             "CPU --live adds, in % of one core over the flight",

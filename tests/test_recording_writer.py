@@ -460,16 +460,21 @@ def test_a_new_channel_keeps_the_chunk_and_its_count(tmp_path: Path) -> None:
     assert [(c.message_start_time, c.message_end_time) for c in summary.chunk_indexes] == [(0, 99)]
 
 
+def _record_poses(path: Path, poses: list) -> dict:
+    """Record a vehicle state per (position, yaw), one a tick; the file decoded by topic."""
+    with Recorder(path) as recorder:
+        for tick, (position, yaw) in enumerate(poses):
+            state = {"position": position, "velocity": [0, 0, 0], "yaw": yaw, "battery": 1.0}
+            recorder.on_topic(TopicRecord("vehicle/state", state, tick * 10**8))
+    return _by_topic(path)
+
+
 def test_transform_only_when_the_pose_changed(tmp_path: Path) -> None:
     # Foxglove holds the latest transform: a vehicle that did not move needs no new one.
     path = tmp_path / "still.mcap"
     poses = [([0, 0, 1], 0.0), ([0, 0, 1], 0.0), ([0, 0, 1], 0.5), ([0, 0, 1], 0.5)]
     poses += [([1, 0, 1], 0.5), ([1, 0, 1], 0.5)]
-    with Recorder(path) as recorder:
-        for tick, (position, yaw) in enumerate(poses):
-            state = {"position": position, "velocity": [0, 0, 0], "yaw": yaw, "battery": 1.0}
-            recorder.on_topic(TopicRecord("vehicle/state", state, tick * 10**8))
-    decoded = _by_topic(path)
+    decoded = _record_poses(path, poses)
     assert len(decoded["/drone1/vehicle/state"]) == 6
     transforms = decoded["/drone1/vehicle/transform"]
     assert [t["timestamp"]["nsec"] for t in transforms] == [0, 2 * 10**8, 4 * 10**8]
@@ -484,11 +489,7 @@ def test_no_transform_for_a_pose_that_is_not_finite(tmp_path: Path) -> None:
     inf, nan = float("inf"), float("nan")
     poses = [([0, 0, 1], 0.0), ([inf, 0, 1], 0.0), ([0, -inf, 1], 0.0), ([0, 0, nan], 0.0)]
     poses += [([0, 0, 1], inf), ([1e308, -1e308, 1e308], 3.0), ([0, 0, 2], 0.0)]
-    with Recorder(path) as recorder:
-        for tick, (position, yaw) in enumerate(poses):
-            state = {"position": position, "velocity": [0, 0, 0], "yaw": yaw, "battery": 1.0}
-            recorder.on_topic(TopicRecord("vehicle/state", state, tick * 10**8))
-    decoded = _by_topic(path)
+    decoded = _record_poses(path, poses)
     assert len(decoded["/drone1/vehicle/state"]) == 7
     transforms = decoded["/drone1/vehicle/transform"]
     assert [t["timestamp"]["nsec"] for t in transforms] == [0, 5 * 10**8, 6 * 10**8]

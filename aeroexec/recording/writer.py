@@ -324,9 +324,6 @@ class Recorder:
         #: published (not `log` or `mission/command`), once their channel exists.
         self._routes: dict[str, tuple[int, Callable[[Mapping[str, Any], int], None] | None]] = {}
         self._await_start = start_pose is not None
-        #: Messages take the plain path (`_write`'s, inlined where they arrive): no live
-        #: view, no time bound, and the recorder open.
-        self._plain = tap is None and flush_interval_ns is None
         self._count = 0
         self._flushed = 0
         self._closed = False
@@ -345,7 +342,6 @@ class Recorder:
             raise lost.error from None  # nothing written yet: a plain "cannot write"
         except BaseException:
             self._closed = True
-            self._plain = False
             self._stream.close()
             raise
         atexit.register(self.close)
@@ -365,19 +361,7 @@ class Recorder:
             encoded = _ORJSON(data, default=_default)
         except _ORJSON_ERROR:
             encoded = encode_json(data)
-        if self._plain:  # `_write`, inlined: every message of a simulated session
-            count = self._count
-            self._count = count + 1
-            self._keep((channel, log_time_ns, encoded, log_time_ns, count & 0xFFFFFFFF))
-            room = self._room - 1
-            room_bytes = self._room_bytes - len(encoded)
-            if room > 0 and room_bytes > 0:
-                self._room = room
-                self._room_bytes = room_bytes
-            else:
-                self.flush()
-        else:
-            self._write(channel, log_time_ns, encoded)
+        self._write(channel, log_time_ns, encoded)
         if record.parent_seq is None:
             self._panels.call(data, log_time_ns)
 
@@ -396,19 +380,7 @@ class Recorder:
             encoded = _ORJSON(data, default=_default)
         except _ORJSON_ERROR:
             encoded = encode_json(data)
-        if self._plain:  # `_write`, inlined: every message of a simulated session
-            count = self._count
-            self._count = count + 1
-            self._keep((channel, log_time_ns, encoded, log_time_ns, count & 0xFFFFFFFF))
-            room = self._room - 1
-            room_bytes = self._room_bytes - len(encoded)
-            if room > 0 and room_bytes > 0:
-                self._room = room
-                self._room_bytes = room_bytes
-            else:
-                self.flush()
-        else:
-            self._write(channel, log_time_ns, encoded)
+        self._write(channel, log_time_ns, encoded)
         if then is not None:
             then(data, log_time_ns)
 
@@ -480,7 +452,6 @@ class Recorder:
             self._guard(self._finish)
         finally:
             self._closed = True
-            self._plain = False
             atexit.unregister(self.close)
             self._forget_finisher()
             self._stream.close()
@@ -520,19 +491,7 @@ class Recorder:
             encoded = _ORJSON(data, default=_default)
         except _ORJSON_ERROR:
             encoded = encode_json(data)
-        if self._plain:  # `_write`, inlined: every message of a simulated session
-            count = self._count
-            self._count = count + 1
-            self._keep((channel, log_time_ns, encoded, log_time_ns, count & 0xFFFFFFFF))
-            room = self._room - 1
-            room_bytes = self._room_bytes - len(encoded)
-            if room > 0 and room_bytes > 0:
-                self._room = room
-                self._room_bytes = room_bytes
-            else:
-                self.flush()
-        else:
-            self._write(channel, log_time_ns, encoded)
+        self._write(channel, log_time_ns, encoded)
 
     def _begin_panels(self, log_time_ns: int) -> None:
         """The panels' start, at the session's first log time."""
@@ -681,7 +640,6 @@ class Recorder:
         self._lost = True
         if not self._closed:
             self._closed = True
-            self._plain = False
             atexit.unregister(self.close)
             self._forget_finisher()
             if self._tap is not None:
