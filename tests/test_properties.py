@@ -578,6 +578,34 @@ def test_a_state_whose_velocity_is_no_numbers_is_no_sample(velocity) -> None:
     assert math.isnan(signals.get("distance_home")[2])
 
 
+def test_a_message_stamped_before_an_earlier_one_counts_from_that_ones_sample() -> None:
+    # A live vehicle's stamps can go back a little. A late message counts from the
+    # latest tick already seen (a tick over is what the online monitor judged), in the
+    # whole signal and in a window (before, a binary search over unsorted stamps gave
+    # whatever it found, or a crash).
+    builder = SignalBuilder(None)
+    state = {"position": [0.0, 0.0, 0.0], "velocity": [0.0, 0.0, 0.0], "battery": 1.0}
+    state |= {"flying": True, "armed": True, "fault": ""}
+    for tick, z, fault in [(1, 1.0, ""), (3, 2.0, "link_lost"), (2, 3.0, ""), (4, 4.0, "")]:
+        position = [0.0, 0.0, z]
+        builder.topic(
+            "vehicle/state", tick * PERIOD_NS, {**state, "position": position, "fault": fault}
+        )
+    signals = builder.finish()
+    assert signals.get("altitude").tolist() == [1.0, 1.0, 1.0, 3.0, 4.0]
+    assert signals.get("link").tolist() == [1.0, 1.0, 1.0, 1.0, 1.0]
+    window = builder.window(2, ["altitude", "link"])
+    assert window is not None
+    assert window["altitude"].tolist() == [1.0, 3.0, 4.0]
+    assert window["link"].tolist() == [1.0, 1.0, 1.0]
+    # A command keeps its own instant, in any order, and one past a window is not in it.
+    for tick in (3, 1, 4):
+        builder.topic("mission/command", tick * PERIOD_NS, {"behavior": "LAND"})
+    commands = builder.window(1, ["command_LAND"], 3)
+    assert commands is not None
+    assert commands["command_LAND"].tolist() == [1.0, 0.0, 1.0]
+
+
 def test_a_field_a_bag_import_only_defaulted_is_missing_not_guessed() -> None:
     builder = SignalBuilder(None)
     state = {

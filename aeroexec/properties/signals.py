@@ -8,7 +8,9 @@ and the same evaluation gives the same verdicts.
 Samples sit on the executive's tick grid (`PERIOD_NS`, 10 Hz): sample k holds the state
 after every message logged in [k, k+1) ticks (zero-order hold between changes). In
 simulation every message falls on a tick; a live flight's messages are assigned to the
-tick they fall in.
+tick they fall in. A message stamped before a later tick another message already fell in
+(a live vehicle's stamps can go back a little) counts from that later tick: a tick over
+is what the online monitor judged, and a late message does not change it afterwards.
 """
 
 from __future__ import annotations
@@ -144,15 +146,37 @@ ROW_COLUMNS = {"altitude": 3, "battery": 7, "flying": 8, "armed": 9}
 
 
 def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np.ndarray:
-    """`name` from state rows as floats (`_row_array`: the speed in column 4)."""
+    """`name` from held state rows (`SignalBuilder._held_rows`), as a column of its own."""
     if name == "distance_home":
         # sqrt(dx*dx + dy*dy), not hypot: each step is rounded as IEEE says, so the online
         # monitor's per-tick value (`SignalBuilder.latest`) is the same float.
         dx, dy = held[:, 1] - _coordinate(first[1]), held[:, 2] - _coordinate(first[2])
         return np.sqrt(dx * dx + dy * dy)
+    if name == "speed":
+        vx, vy, vz = held[:, 4], held[:, 5], held[:, 6]
+        return np.sqrt(vx * vx + vy * vy + vz * vz)
     if name == "landed":
         return 1.0 - held[:, 8]
-    return held[:, 4 if name == "speed" else ROW_COLUMNS[name]]
+    # A copy: a column of the rows would be read a row's width apart, at every use.
+    return held[:, ROW_COLUMNS[name]].copy()
+
+
+def _step_column(changes: list[tuple[int, float]], start: int, length: int) -> np.ndarray:
+    """The `length` samples from `start` of a signal kept as its changes (sample, value),
+    in order: each sample holds the last change at or before it, 0 before the first (a
+    change stamped before one ahead of it counts from that one's sample, as the module
+    says). One repeat of the values by how many samples each holds (a search of every
+    sample and a gather cost three times more)."""
+    counts = []
+    values = [0.0]
+    held_from = 0  # where the value last added holds from (0: before the first change)
+    for k, value in changes:  # a few changes: Python, not a dozen numpy calls
+        begins = min(max(k - start, held_from), length)
+        counts.append(begins - held_from)
+        values.append(value)
+        held_from = begins
+    counts.append(length - held_from)
+    return np.repeat(values, counts)
 
 
 def _coordinate(value: Any) -> float:
@@ -182,7 +206,7 @@ def _speed(row: Row) -> float:
 
 
 def _speed_of(velocity: Any) -> float:
-    """sqrt(vx*vx + vy*vy + vz*vz) on floats, as `_row_array`'s columns compute it."""
+    """sqrt(vx*vx + vy*vy + vz*vz) on floats, as `_vehicle_column` does."""
     vx, vy, vz = float(velocity[0]), float(velocity[1]), float(velocity[2])
     return math.sqrt(vx * vx + vy * vy + vz * vz)
 
@@ -346,6 +370,10 @@ class SignalBuilder:
         self._pulses: dict[str, list[int]] = {}
         self._sources: set[str] = set()
         self._last = -1
+        #: Whether every message so far was stamped at or after the ones before it (a
+        #: live vehicle's stamps can go back a little): then the changes and rows are in
+        #: order, and a window's start is found by a search.
+        self._in_order = True
         self._active: frozenset[str] = frozenset()
         self._capabilities: frozenset[str] = frozenset()
         self._recurrent: dict[str, bool] = {}
@@ -391,6 +419,8 @@ class SignalBuilder:
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
+        elif k < self._last:
+            self._in_order = False
         if not isinstance(data, dict):
             return
         if name == "list_of_active_behaviors":
@@ -427,6 +457,8 @@ class SignalBuilder:
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
+        elif k < self._last:
+            self._in_order = False
         if not isinstance(response, dict) or not isinstance(request, dict):
             return
         if service == "default_values":
@@ -463,20 +495,12 @@ class SignalBuilder:
         `end` signal is 1 on its last sample; a window of a running session has no end)."""
         length = self._last + 1 - start if self._last >= start else 0
         values: dict[str, np.ndarray] = {}
-        samples = np.arange(start, start + length)
         for name, changes in self._changes.items():
-            at = np.array([k for k, _ in changes])
-            column = np.array([v for _, v in changes])
             # A count or a 0/1 flag is 0 until its first change.
-            index = np.searchsorted(at, samples, side="right") - 1
-            values[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
+            values[name] = _step_column(changes, start, length)
         first_row = self._first_row
         if self._table and length and first_row is not None:
-            # The last state of each tick counts; before the first, the first (a vehicle
-            # signal is known from the session's start).
-            rows = self._table_from(start)
-            index = np.maximum(np.searchsorted(rows[:, 0], samples, side="right") - 1, 0)
-            held = rows[index]
+            held = self._held_rows(start, length)
             for name in _ROW_SIGNALS:
                 if not self._guessed(name):
                     values[name] = _vehicle_column(name, held, first_row)
@@ -562,7 +586,6 @@ class SignalBuilder:
         length = (self._last if end is None else end) + 1 - start
         if length <= 0:
             return None
-        samples = np.arange(start, start + length)
         out: dict[str, np.ndarray] = {}
         rows: np.ndarray | None = None
         for name in names:
@@ -573,25 +596,22 @@ class SignalBuilder:
                 if not self._table or self._first_row is None:
                     return None
                 if rows is None:
-                    part = self._table_from(start)
-                    at = np.searchsorted(part[:, 0], samples, side="right") - 1
-                    rows = part[np.maximum(at, 0)]
+                    rows = self._held_rows(start, length)
                 out[name] = _vehicle_column(name, rows, self._first_row)
             elif changes is not None:
-                first = max(bisect_right(changes, (start, math.inf)) - 1, 0)
-                part = changes[first:]
-                at = np.array([k for k, _ in part])
-                column = np.array([v for _, v in part])
-                index = np.searchsorted(at, samples, side="right") - 1
-                out[name] = np.where(index >= 0, column[np.maximum(index, 0)], 0.0)
+                if self._in_order:  # else all of them: `_step_column` orders them
+                    changes = changes[max(bisect_right(changes, (start, math.inf)) - 1, 0) :]
+                out[name] = _step_column(changes, start, length)
                 first_k = int(self._first_row[0]) if self._first_row is not None else -1
                 if name in ("link", "grounded") and start <= first_k < self._last + 1:
                     # Known from the first state: its value holds before it too.
                     out[name][: first_k - start] = out[name][first_k - start]
             elif name in self._pulses:
                 pulses = self._pulses[name]
+                if self._in_order:
+                    pulses = pulses[bisect_right(pulses, start - 1) :]
                 column = np.zeros(length)
-                column[[k - start for k in pulses[bisect_right(pulses, start - 1) :]]] = 1.0
+                column[[k - start for k in pulses if start <= k < start + length]] = 1.0
                 out[name] = column
             elif name == "end" or any(
                 name.startswith(prefix) and source in self._sources
@@ -636,6 +656,8 @@ class SignalBuilder:
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
+        elif k < self._last:
+            self._in_order = False
         try:
             # A state of numbers, each field as long as it should be, straight into the
             # table: no row of Python objects is kept (the others take `_odd_state`).
@@ -705,17 +727,21 @@ class SignalBuilder:
             self._add_row(_PACK_ROW(*[math.nan if value is None else value for value in row]))
         return False
 
-    def _table_from(self, start: int) -> np.ndarray:
-        """The numeric state rows from the last one at or before sample `start` (the
-        first, when none is) as floats, with the speed (from the velocity) in column 4:
-        a copy, so the table can grow on."""
+    def _held_rows(self, start: int, length: int) -> np.ndarray:
+        """The numeric state row each of the `length` samples from `start` holds: a copy,
+        so the table can grow on. The last state of a tick counts; before the first, the
+        first (a vehicle signal is known from the session's start)."""
         packed = np.frombuffer(self._table, dtype=float).reshape(-1, ROW_LENGTH)
-        first = max(int(np.searchsorted(packed[:, 0], start, side="right")) - 1, 0)
-        table = packed[first:].copy()
-        del packed  # the table is exported while a view of it lives: it could not grow
-        vx, vy, vz = table[:, 4], table[:, 5], table[:, 6]
-        table[:, 4] = np.sqrt(vx * vx + vy * vy + vz * vz)
-        return table
+        # A row stamped before one ahead of it holds from that one's sample (`_step_column`).
+        at = packed[:, 0] if self._in_order else np.maximum.accumulate(packed[:, 0])
+        first = max(int(np.searchsorted(at, start, side="right")) - 1, 0)
+        # Each row holds from its sample (the first: from `start`) to the next row's: the
+        # rows repeated that many times, one copy (a gather of each sample's row costs
+        # several times more).
+        bounds = np.clip(at[first + 1 :].astype(np.intp) - start, 0, length)
+        held = np.repeat(packed[first:], np.diff(bounds, prepend=0, append=length), axis=0)
+        del packed, at  # the table is exported while a view lives: it could not grow
+        return held
 
     def _fault(self, k: int, kind: str) -> None:
         if kind not in self._faults:
