@@ -232,6 +232,50 @@ def _states(rng: random.Random) -> list:
     return records
 
 
+def test_states_fed_in_batches_give_the_signals_of_states_fed_one_by_one() -> None:
+    # `SignalBuilder.vehicle_states` takes the common state straight into the table and
+    # any other through `vehicle_state`: on every kind of state (faults that come and
+    # go, a battery that falls below the low level, an import's defaults, stamps that
+    # go back, a first state that is odd), in batches of any size, the same signals.
+    from aeroexec.properties.signals import SignalBuilder
+
+    faults = ["", "", "", "link_lost", "stuck_motor:2", None, "mode_changed"]
+    for seed in range(80):
+        rng = random.Random(seed)
+        records = [r for r in _states(rng) if r.topic == "vehicle/state"]
+        for record in records:
+            data = record.data
+            if rng.random() < 0.1:
+                data["fault"] = rng.choice(faults)
+            if rng.random() < 0.03:
+                data["defaulted"] = rng.choice([["armed"], [], ["fault"]])
+            if isinstance(data.get("battery"), float) and rng.random() < 0.1:
+                data["battery"] = rng.choice([0.1, 0.3, math.nan])
+        if rng.random() < 0.3:
+            records.insert(2, type(records[0])("vehicle/state", dict(records[0].data), 0))
+        if rng.random() < 0.2:  # a first state that makes no sample
+            records.insert(0, type(records[0])("vehicle/state", {"position": [0, 0, 0]}, 0))
+        one, batched = SignalBuilder(None), SignalBuilder(None)
+        for record in records:
+            one.vehicle_state(record.log_time_ns, record.data)
+        at = 0
+        while at < len(records):
+            size = rng.choice([1, 2, 5, 64])
+            batched.vehicle_states(records[at : at + size])
+            at += size
+        # repr: the rows hold NaN where a state's value was null (nan != nan)
+        assert repr((batched.home_row, batched.last_row)) == repr((one.home_row, one.last_row))
+        mine, theirs = batched.finish(), one.finish()
+        assert (mine.length, mine.sources, mine.defaulted) == (
+            theirs.length,
+            theirs.sources,
+            theirs.defaulted,
+        )
+        assert mine.values.keys() == theirs.values.keys(), seed
+        for name, column in mine.values.items():
+            assert np.array_equal(column, theirs.values[name], equal_nan=True), (seed, name)
+
+
 @pytest.mark.parametrize(
     "body",
     [

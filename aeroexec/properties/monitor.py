@@ -84,7 +84,6 @@ class PropertyMonitor:
     def __init__(self, properties: PropertySet, *, check_every_s: float = CHECK_EVERY_S) -> None:
         self.properties = properties
         self._builder = SignalBuilder(None)
-        self._vehicle_state = self._builder.vehicle_state
         #: Vehicle states not fed yet (`_feed_states`).
         self._states: list[TopicRecord] = []
         self._every = max(1, round(check_every_s / PERIOD_S))
@@ -212,9 +211,7 @@ class PropertyMonitor:
         """Feed the builder the vehicle states kept so far."""
         states = self._states
         if states:
-            vehicle_state = self._vehicle_state
-            for state in states:
-                vehicle_state(state.log_time_ns, state.data)
+            self._builder.vehicle_states(states)
             states.clear()
 
     def _ticks_over(self, t_ns: int) -> None:

@@ -8,9 +8,9 @@ and the same evaluation gives the same verdicts.
 Samples sit on the executive's tick grid (`PERIOD_NS`, 10 Hz): sample k holds the state
 after every message logged in [k, k+1) ticks (zero-order hold between changes). In
 simulation every message falls on a tick; a live flight's messages are assigned to the
-tick they fall in. A message stamped before a later tick another message already fell in
-(a live vehicle's stamps can go back a little) counts from that later tick: a tick over
-is what the online monitor judged, and a late message does not change it afterwards.
+tick they fall in. A message stamped before an earlier one of the same signal (a live
+vehicle's stamps can go back a little) counts from that one's tick: a tick over is what
+the online monitor judged, and a late message does not change it afterwards.
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from aeroexec.executive.messages import TopicRecord
 
 #: The executive's tick (aeroexec/executive/clock.py steps 0.1 s): one sample per tick.
 PERIOD_NS = 100_000_000
@@ -370,10 +372,12 @@ class SignalBuilder:
         self._pulses: dict[str, list[int]] = {}
         self._sources: set[str] = set()
         self._last = -1
-        #: Whether every message so far was stamped at or after the ones before it (a
-        #: live vehicle's stamps can go back a little): then the changes and rows are in
-        #: order, and a window's start is found by a search.
-        self._in_order = True
+        #: Whether each signal's changes and pulses, and the state rows up to
+        #: `_rows_checked`, are in the order of their samples (a live vehicle's stamps
+        #: can go back a little): then a window's start is found by a search.
+        self._changes_in_order = True
+        self._rows_in_order = True
+        self._rows_checked = 0
         self._active: frozenset[str] = frozenset()
         self._capabilities: frozenset[str] = frozenset()
         self._recurrent: dict[str, bool] = {}
@@ -419,8 +423,6 @@ class SignalBuilder:
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
-        elif k < self._last:
-            self._in_order = False
         if not isinstance(data, dict):
             return
         if name == "list_of_active_behaviors":
@@ -442,6 +444,8 @@ class SignalBuilder:
             if isinstance(behavior, str) and behavior:
                 pulses = self._pulses.setdefault("command_" + behavior, [])
                 if not pulses or pulses[-1] != k:
+                    if pulses and k < pulses[-1]:
+                        self._changes_in_order = False
                     pulses.append(k)
         elif name == "behavior_event":
             uid = data.get("uid")
@@ -457,8 +461,6 @@ class SignalBuilder:
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
-        elif k < self._last:
-            self._in_order = False
         if not isinstance(response, dict) or not isinstance(request, dict):
             return
         if service == "default_values":
@@ -599,7 +601,7 @@ class SignalBuilder:
                     rows = self._held_rows(start, length)
                 out[name] = _vehicle_column(name, rows, self._first_row)
             elif changes is not None:
-                if self._in_order:  # else all of them: `_step_column` orders them
+                if self._changes_in_order:  # else all: `_step_column` orders them
                     changes = changes[max(bisect_right(changes, (start, math.inf)) - 1, 0) :]
                 out[name] = _step_column(changes, start, length)
                 first_k = int(self._first_row[0]) if self._first_row is not None else -1
@@ -608,7 +610,7 @@ class SignalBuilder:
                     out[name][: first_k - start] = out[name][first_k - start]
             elif name in self._pulses:
                 pulses = self._pulses[name]
-                if self._in_order:
+                if self._changes_in_order:
                     pulses = pulses[bisect_right(pulses, start - 1) :]
                 column = np.zeros(length)
                 column[[k - start for k in pulses if start <= k < start + length]] = 1.0
@@ -631,6 +633,8 @@ class SignalBuilder:
         if changes and changes[-1][0] == k:
             changes[-1] = (k, value)  # the state at the end of the tick counts
         else:
+            if changes and k < changes[-1][0]:
+                self._changes_in_order = False
             changes.append((k, value))
 
     def _set_members(
@@ -648,6 +652,49 @@ class SignalBuilder:
         held = self._capabilities
         return any(other in held for name in held for other in self._conflicts(name))
 
+    def vehicle_states(self, records: Iterable[TopicRecord]) -> None:
+        """`vehicle_state` of each record in turn (a monitor feeds its states in
+        batches), with what it looks up once a batch instead of once a state (0.45 of
+        2.4 ms on a 10-minute patrol's states): the common state (a row of numbers, no
+        fault or low battery first seen, none of an import's defaults, after the first
+        sample) goes straight into the table; any other takes `vehicle_state` itself."""
+        add_row, last, last_fault = self._add_row, self._last, self._last_fault
+        usual_battery = -math.inf if "low_battery" in self._faults else LOW_BATTERY_LEVEL
+        added = False
+        for record in records:
+            data = record.data
+            k = record.log_time_ns // PERIOD_NS
+            try:
+                x, y, z = data["position"]
+                vx, vy, vz = data["velocity"]
+                battery = data["battery"]
+                row = _PACK_ROW(
+                    k, x, y, z, vx, vy, vz, battery, data["flying"], data.get("armed", False)
+                )
+                # The fault is None before the first sample: the first takes the long way.
+                usual = (
+                    battery >= usual_battery
+                    and (data.get("fault") or "") == last_fault
+                    and "defaulted" not in data
+                )
+            except (struct.error, ValueError, LookupError, TypeError, AttributeError):
+                usual = False
+            if usual:
+                add_row(row)
+                if k > last:
+                    last = k
+                added = True
+                continue
+            if added:  # what `vehicle_state` says of the rows added so far
+                self._last_row, self._last_numeric, added = None, True, False
+            self._last = last
+            self.vehicle_state(record.log_time_ns, data)
+            last, last_fault = self._last, self._last_fault
+            usual_battery = -math.inf if "low_battery" in self._faults else LOW_BATTERY_LEVEL
+        self._last = last
+        if added:
+            self._last_row, self._last_numeric = None, True
+
     def vehicle_state(self, t_ns: int, data: Any) -> bool:
         """A `vehicle/state` message (what `topic` does with one), in one call: the hot
         path online, a state per tick. Returns whether the state is a sample (False: it
@@ -656,8 +703,6 @@ class SignalBuilder:
         k = t_ns // PERIOD_NS
         if k > self._last:
             self._last = k
-        elif k < self._last:
-            self._in_order = False
         try:
             # A state of numbers, each field as long as it should be, straight into the
             # table: no row of Python objects is kept (the others take `_odd_state`).
@@ -732,8 +777,12 @@ class SignalBuilder:
         so the table can grow on. The last state of a tick counts; before the first, the
         first (a vehicle signal is known from the session's start)."""
         packed = np.frombuffer(self._table, dtype=float).reshape(-1, ROW_LENGTH)
+        if self._rows_in_order and len(packed) > self._rows_checked:
+            since = packed[max(self._rows_checked - 1, 0) :, 0]
+            self._rows_in_order = not (since[1:] < since[:-1]).any()
+            self._rows_checked = len(packed)
         # A row stamped before one ahead of it holds from that one's sample (`_step_column`).
-        at = packed[:, 0] if self._in_order else np.maximum.accumulate(packed[:, 0])
+        at = packed[:, 0] if self._rows_in_order else np.maximum.accumulate(packed[:, 0])
         first = max(int(np.searchsorted(at, start, side="right")) - 1, 0)
         # Each row holds from its sample (the first: from `start`) to the next row's: the
         # rows repeated that many times, one copy (a gather of each sample's row costs
