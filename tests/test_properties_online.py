@@ -346,11 +346,12 @@ def test_a_property_judged_by_row_stops_where_ticks_judged_when_over_stop(body) 
 
 
 def test_a_state_test_is_the_row_value_test() -> None:
-    # `signals.state_test` judges a state before the builder has it: the same floats as
-    # `row_value` on the row the builder makes of that state.
+    # `signals.state_holds` judges a state before the builder has it: the same floats as
+    # `row_value` on the row the builder makes of that state; all tests in one call hold
+    # where each does.
     import operator
 
-    from aeroexec.properties.signals import ROW_SIGNALS, SignalBuilder, row_value, state_test
+    from aeroexec.properties.signals import ROW_SIGNALS, SignalBuilder, row_value, state_holds
 
     rng = random.Random(7)
     for _ in range(300):
@@ -371,14 +372,44 @@ def test_a_state_test_is_the_row_value_test() -> None:
             assert builder.vehicle_state(tick * 100_000_000, state)
         first, row = builder.home_row, builder.last_row
         assert first is not None and row is not None
+        tests, verdicts = [], []
         for name in sorted(ROW_SIGNALS):
-            bound = rng.choice([0.0, 1.0, rng.uniform(-5, 5)])
-            for op in (operator.le, operator.gt, operator.eq):
-                holds = state_test(name, op, bound, first)
+            # Bounds about the value itself too: a geofence's square inside its circle
+            # (`state_holds`) must never hold where the distance does not.
+            value = row_value(name, row, first)
+            near = value * rng.choice([1.0, 0.99, 0.71, 0.7, 1.01]) if math.isfinite(value) else 1
+            bounds = [0.0, 1.0, rng.uniform(-5, 5), rng.uniform(0, 30), near, math.inf, 1e300]
+            bound = rng.choice([*bounds, math.nan])
+            for op in (
+                operator.le,
+                operator.lt,
+                operator.gt,
+                operator.ge,
+                operator.eq,
+                operator.ne,
+            ):
                 expected = op(row_value(name, row, first), bound)
-                assert holds(states[-1]) == expected, (name, states[-1])
-                # Judged again on the same numbers (kept when it held): the same verdict.
-                assert holds(dict(states[-1])) == expected
+                assert state_holds([(name, op, bound)], first)(states[-1]) == expected, name
+                tests.append((name, op, bound))
+                verdicts.append(expected)
+        picked = rng.sample(range(len(tests)), 3)
+        together = state_holds([tests[i] for i in picked], first)(states[-1])
+        assert together == all(verdicts[i] for i in picked)
+        # An import's guess is judged the general way, whatever the values; so is text
+        # of a number, which the builder drops (a velocity's too).
+        assert not state_holds([], first)({**states[-1], "defaulted": ["armed"]})
+        with pytest.raises(TypeError):
+            state_holds([("speed", operator.le, 5.0)], first)({"velocity": ["1.5", 0, 0]})
+    # A geofence on the diagonal, from well inside to just outside its circle.
+    home = (0, 1e3, -2e3, 0, 0, 0, 0, 1, 1, 1)
+    for bound in (0.5, 50.0, 1e5, 1e160):
+        for test in (operator.le, operator.lt):
+            holds = state_holds([("distance_home", test, bound)], home)
+            for share in (0.5, 0.69, 0.7, 0.7071, 0.7072, 0.71, 0.75, 0.9, 1.0):
+                x, y = 1e3 + share * bound, -2e3 - share * bound
+                state = {"position": [x, y, 1.0]}
+                row = (0, x, y, 1.0, 0, 0, 0, 1, 1, 1)
+                assert holds(state) == test(row_value("distance_home", row, home), bound)
 
 
 # -- fly --spec, against MavSim (the SITL flight is in test_sitl_flights.py) ----------------

@@ -20,7 +20,7 @@ bounded time around each tick (`Formula.window_ticks`):
 
 * a vehicle signal against a number (`always(distance_home <= 50)`, a ceiling, a
   battery floor: `Formula.threshold`) is judged on each vehicle state as it comes, on
-  the state itself (`signals.state_test`, the same floats): a tick's verdict is that of
+  the state itself (`signals.state_holds`, the same floats): a tick's verdict is that of
   its last state, so while every state keeps it nothing else is needed. It is judged
   so once the first state is known and the ticks so far have been judged the next way
   (before its first state, a vehicle signal holds the first state's value); a state
@@ -55,7 +55,7 @@ from aeroexec.properties.signals import (
     ROW_SIGNALS,
     Row,
     SignalBuilder,
-    state_test,
+    state_holds,
 )
 from aeroexec.properties.spec import Property, PropertySet
 from aeroexec.recording.schemas import PROPERTIES_TOPIC
@@ -67,7 +67,7 @@ CHECK_EVERY_S = 0.5
 #: simulated session; a few tens of kB).
 STATES_AT_ONCE = 64
 TOPIC = PROPERTIES_TOPIC
-#: A test of a vehicle state (`signals.state_test`).
+#: A test of a vehicle state (`signals.state_holds`).
 StateTest = Callable[[dict[str, Any]], bool]
 #: A property judged by row: (property, signal, test, bound), `Formula.threshold`.
 ByRow = tuple[Property, str, Callable[[float, float], bool], float]
@@ -110,9 +110,10 @@ class PropertyMonitor:
         self._instant: list[tuple[Property, Callable[[Sample], float]]] = []
         self._instant_names: tuple[str, ...] = ()
         self._group()
-        #: Their tests on a state, and the tests alone (none: none is judged by row).
+        #: Their tests on a state, one each (which a state broke), and all in one call
+        #: (None: none is judged by row).
         self._state_tests: list[tuple[Property, StateTest]] = []
-        self._state_holds: tuple[StateTest, ...] = ()
+        self._state_holds: StateTest | None = None
         #: The tick the last message fell in (kept while ticks are judged as they end),
         #: and the start of the tick whose first message has them judged.
         self._open = -1
@@ -180,18 +181,12 @@ class PropertyMonitor:
                 self._ticks_over(t_ns)
             states = self._states
             states.append(record)
-            tests = self._state_holds
-            if tests:  # judge the properties judged by row on it
-                state = record.data
-                kept = False
+            holds = self._state_holds
+            if holds is not None:  # judge the properties judged by row on it, in one call
                 try:
-                    for holds in tests:
-                        if not holds(state):
-                            break
-                    else:
-                        kept = "defaulted" not in state
+                    kept = holds(record.data)
                 except _UNJUDGED:
-                    pass
+                    kept = False
                 if not kept:
                     self._state_broke(record)
             if len(states) >= STATES_AT_ONCE:
@@ -261,7 +256,7 @@ class PropertyMonitor:
             return
         self._by_row = [entry for entry in self._row_able if entry[0].name in on]
         self._state_tests = self._tests_on(first)
-        self._state_holds = tuple(holds for _, holds in self._state_tests)
+        self._state_holds = self._all_hold(first)
         self._group()
 
     def _state_broke(self, record: TopicRecord) -> None:
@@ -275,15 +270,20 @@ class PropertyMonitor:
         self._by_row_off(broken, record.log_time_ns // PERIOD_NS)
 
     def _tests_on(self, first: Row) -> list[tuple[Property, StateTest]]:
-        """The tests of the properties judged by row, `first` the first state's row."""
-        tests = []
-        for prop, signal, test, bound in self._by_row:
-            try:
-                holds = state_test(signal, test, bound, first)
-            except _UNJUDGED:  # a home that is no number
-                holds = _never
-            tests.append((prop, holds))
-        return tests
+        """Each property judged by row with its own test (which ones a state broke),
+        `first` the first state's row."""
+        return [
+            (prop, state_holds([(signal, test, bound)], first))
+            for prop, signal, test, bound in self._by_row
+        ]
+
+    def _all_hold(self, first: Row) -> StateTest | None:
+        """One test of every property judged by row (None: none is)."""
+        if not self._by_row:
+            return None
+        return state_holds(
+            [(signal, test, bound) for _, signal, test, bound in self._by_row], first
+        )
 
     def _by_row_off(self, props: list[Property], tick: int) -> None:
         """Judge `props` from `tick` on with the others, when ticks are over (every tick
@@ -292,7 +292,8 @@ class PropertyMonitor:
         names = {prop.name for prop in props}
         self._by_row = [entry for entry in self._by_row if entry[0].name not in names]
         self._state_tests = [e for e in self._state_tests if e[0].name not in names]
-        self._state_holds = tuple(holds for _, holds in self._state_tests)
+        first = self._builder.home_row
+        self._state_holds = self._all_hold(first) if first is not None else None
         for name in names:
             self._judged[name] = tick - 1
         self._group()
@@ -381,18 +382,12 @@ class PropertyMonitor:
 
 
 def _holds(holds: StateTest, state: dict[str, Any]) -> bool:
-    """Whether a state test keeps its property on `state` (not on guessed fields, nor
-    where it cannot be judged on floats)."""
-    if "defaulted" in state:
-        return False
+    """Whether a state test keeps its property on `state` (False too where it cannot be
+    judged on floats)."""
     try:
-        return bool(holds(state))
+        return holds(state)
     except _UNJUDGED:
         return False
-
-
-def _never(state: dict[str, Any]) -> bool:
-    return False
 
 
 def _final(verdict: Verdict) -> dict[str, Any]:

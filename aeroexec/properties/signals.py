@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import operator
 import struct
 from array import array
 from bisect import bisect_right
@@ -213,67 +214,82 @@ def _speed_of(velocity: Any) -> float:
     return math.sqrt(vx * vx + vy * vy + vz * vz)
 
 
-def state_test(
-    name: str, test: Callable[[float, float], bool], bound: float, first: Row
-) -> Callable[[Mapping[str, Any]], bool]:
-    """`test(row_value(name, row, first), bound)` for the row `SignalBuilder.vehicle_state`
-    makes of a vehicle state, computed from the state itself (the same floats): one call
-    a state for a monitor that judges each as it comes, before it is fed. Raises what
-    `row_value` raises (a home that is no number, here; a state that is not, or is
-    malformed, when called), and a TypeError on a value that is no number (text, even
-    text of a number: the builder drops such a row).
-
-    A value is compared as it is, not made a float first: a number compares with the
-    bound as its float does, and the test is one Python call a state (two made each of
-    them cost about a millisecond more of a 10-minute patrol, measured). A test of the
-    distance or the speed is not computed again on a state whose position (velocity)
-    equals the last it held on: the same numbers, the same verdict (a hovering
-    vehicle's position does not change for minutes)."""
-    if name == "armed":
-        return lambda state: test(state.get("armed", False), bound)
-    if name in ("battery", "flying"):
-        return lambda state: test(state[name], bound)
-    if name == "landed":
-        return lambda state: test(1.0 - state["flying"], bound)
-    if name == "altitude":
-        return lambda state: test(state["position"][2], bound)
-    if name == "speed":
-        return _unless_same("velocity", lambda velocity: test(_speed_of(velocity), bound))
-    assert name == "distance_home", name
-    home_x, home_y = float(first[1]), float(first[2])
-    kept: list[Any] = [_NOTHING]
-
-    def distance(state: Mapping[str, Any]) -> bool:
-        position = state["position"]
-        if position == kept[0]:
-            return True
-        dx, dy = position[0] - home_x, position[1] - home_y
-        if test(math.sqrt(dx * dx + dy * dy), bound):
-            kept[0] = position
-            return True
-        return False
-
-    return distance
+#: A test of a vehicle signal against a number: (signal, test, bound), `Formula.threshold`.
+RowTest = tuple[str, Callable[[float, float], bool], float]
+#: The comparisons a row test can make, as Python writes them.
+_COMPARISONS: dict[Callable[[Any, Any], bool], str] = {
+    operator.lt: "<",
+    operator.le: "<=",
+    operator.gt: ">",
+    operator.ge: ">=",
+    operator.eq: "==",
+    operator.ne: "!=",
+}
+#: How each row signal but the distance and the speed is read from a vehicle state.
+_READ = {
+    "battery": 'state["battery"]',
+    "flying": 'state["flying"]',
+    "altitude": 'state["position"][2]',
+    "armed": 'state.get("armed", False)',
+    "landed": '1.0 - state["flying"]',
+}
 
 
-_NOTHING = object()
+def state_holds(tests: Iterable[RowTest], first: Row) -> Callable[[Mapping[str, Any]], bool]:
+    """Whether a vehicle state keeps every test, `test(row_value(signal, row, first),
+    bound)` for the row `SignalBuilder.vehicle_state` makes of it, computed from the
+    state itself (the same floats), and is no import's guess ("defaulted"): for a
+    monitor that judges each state as it comes, before it is fed. Raises what
+    `row_value` raises on a state that is not numbers, or is malformed, and a TypeError
+    on a value that is no number (text, even text of a number: the builder drops such a
+    row). A test of the distance from a home that is no number never holds.
 
-
-def _unless_same(field: str, holds: Callable[[Any], bool]) -> Callable[[Mapping[str, Any]], bool]:
-    """`holds(state[field])`, taken as true without computing it on a value equal to the
-    last one it held on."""
-    kept: list[Any] = [_NOTHING]
-
-    def test(state: Mapping[str, Any]) -> bool:
-        value = state[field]
-        if value == kept[0]:
-            return True
-        if holds(value):
-            kept[0] = value
-            return True
-        return False
-
-    return test
+    One function for all the tests, written for them: inside a session, work done once
+    a state costs several times what it costs alone (a loop over the tests as data, or
+    a closure per test, cost 6-8 ms more of a 10-minute patrol than this, measured).
+    Its source is made of the fixed lines below, one per test: the signal picks the
+    line, the test its operator, and the numbers are values it is given, never text
+    (nothing from a property file is in the source)."""
+    namespace: dict[str, Any] = {"sqrt": math.sqrt}
+    lines = []
+    for i, (name, test, bound) in enumerate(tests):
+        compare = _COMPARISONS[test]
+        namespace[f"bound{i}"] = bound
+        if name == "distance_home":
+            try:
+                namespace[f"home{i}"] = (float(first[1]), float(first[2]))
+            except (TypeError, ValueError):
+                lines.append("return False")
+                continue
+            # A geofence (<= or < a bound) holds on a square inside its circle without
+            # the distance: |dx|, |dy| <= 0.7 bound give a distance of at most 0.99
+            # bound, with any rounding (dx and dy are the floats the distance is
+            # computed from), and no square of a side over 1e150 overflows.
+            fence = (test is operator.le or test is operator.lt) and bound > 0
+            namespace[f"side{i}"] = min(0.7 * bound, 1e150) if fence else -1.0
+            lines += [
+                'position = state["position"]',
+                f"dx, dy = position[0] - home{i}[0], position[1] - home{i}[1]",
+                f"if not (-side{i} <= dx <= side{i} and -side{i} <= dy <= side{i}):",
+                f"    if not (sqrt(dx * dx + dy * dy) {compare} bound{i}):",
+                "        return False",
+            ]
+        elif name == "speed":
+            # + 0.0: a number as its float (`_speed_of`); text refused, as the builder
+            # refuses it.
+            lines += [
+                'velocity = state["velocity"]',
+                "x, y, z = velocity[0] + 0.0, velocity[1] + 0.0, velocity[2] + 0.0",
+                f"if not (sqrt(x * x + y * y + z * z) {compare} bound{i}):",
+                "    return False",
+            ]
+        else:
+            lines += [f"if not ({_READ[name]} {compare} bound{i}):", "    return False"]
+    lines.append('return "defaulted" not in state')
+    source = "def holds(state):\n" + "".join(f"    {line}\n" for line in lines)
+    exec(compile(source, "<state tests>", "exec"), namespace)
+    holds: Callable[[Mapping[str, Any]], bool] = namespace["holds"]
+    return holds
 
 
 def _row_of(k: int, data: dict[str, Any]) -> Row:
