@@ -149,7 +149,7 @@ ROW_COLUMNS = {"altitude": 3, "battery": 7, "flying": 8, "armed": 9}
 
 
 def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np.ndarray:
-    """`name` from held state rows (`SignalBuilder._held_rows`), as a column of its own."""
+    """`name` at each of the state rows `held` (a view of the table's: not kept)."""
     if name == "distance_home":
         # sqrt(dx*dx + dy*dy), not hypot: each step is rounded as IEEE says, so the online
         # monitor's per-tick value (`SignalBuilder.latest`) is the same float.
@@ -160,8 +160,7 @@ def _vehicle_column(name: str, held: np.ndarray, first: tuple[float, ...]) -> np
         return np.sqrt(vx * vx + vy * vy + vz * vz)
     if name == "landed":
         return 1.0 - held[:, 8]
-    # A copy: a column of the rows would be read a row's width apart, at every use.
-    return held[:, ROW_COLUMNS[name]].copy()
+    return held[:, ROW_COLUMNS[name]]
 
 
 def _step_column(changes: list[tuple[int, float]], start: int, length: int) -> np.ndarray:
@@ -518,10 +517,8 @@ class SignalBuilder:
             values[name] = _step_column(changes, start, length)
         first_row = self._first_row
         if self._table and length and first_row is not None:
-            held = self._held_rows(start, length)
-            for name in _ROW_SIGNALS:
-                if not self._guessed(name):
-                    values[name] = _vehicle_column(name, held, first_row)
+            names = [name for name in _ROW_SIGNALS if not self._guessed(name)]
+            values.update(self._row_columns(start, length, names))
             first_k = int(first_row[0])
             for name in ("link", "grounded"):
                 if name in values and first_k >= start:
@@ -605,7 +602,7 @@ class SignalBuilder:
         if length <= 0:
             return None
         out: dict[str, np.ndarray] = {}
-        rows: np.ndarray | None = None
+        row_names: list[str] = []
         for name in names:
             changes = self._changes.get(name)
             if self._guessed(name):
@@ -613,9 +610,7 @@ class SignalBuilder:
             if name in _ROW_SIGNALS:
                 if not self._table or self._first_row is None:
                     return None
-                if rows is None:
-                    rows = self._held_rows(start, length)
-                out[name] = _vehicle_column(name, rows, self._first_row)
+                row_names.append(name)
             elif changes is not None:
                 if self._changes_in_order:  # else all: `_step_column` orders them
                     changes = changes[max(bisect_right(changes, (start, math.inf)) - 1, 0) :]
@@ -638,6 +633,8 @@ class SignalBuilder:
                 out[name] = np.zeros(length)
             else:
                 return None
+        if row_names:
+            out.update(self._row_columns(start, length, row_names))
         return out
 
     # -- internals --------------------------------------------------------------------------
@@ -788,25 +785,34 @@ class SignalBuilder:
             self._add_row(_PACK_ROW(*[math.nan if value is None else value for value in row]))
         return False
 
-    def _held_rows(self, start: int, length: int) -> np.ndarray:
-        """The numeric state row each of the `length` samples from `start` holds: a copy,
-        so the table can grow on. The last state of a tick counts; before the first, the
-        first (a vehicle signal is known from the session's start)."""
+    def _row_columns(self, start: int, length: int, names: Iterable[str]) -> dict[str, np.ndarray]:
+        """The row signals `names` at the `length` samples from `start`: each sample
+        holds the last numeric state row at or before it (the last state of a tick
+        counts; before the first, the first: a vehicle signal is known from the
+        session's start). Each signal is computed on the rows, then repeated by how many
+        samples each row holds: new arrays, so the table can grow on, and no copy of the
+        whole rows (half a megabyte a 10-minute session, whose fresh pages cost more
+        than the rest of the end of it, measured)."""
+        first_row = self._first_row
+        assert first_row is not None
         packed = np.frombuffer(self._table, dtype=float).reshape(-1, ROW_LENGTH)
         if self._rows_in_order and len(packed) > self._rows_checked:
             since = packed[max(self._rows_checked - 1, 0) :, 0]
             self._rows_in_order = not (since[1:] < since[:-1]).any()
             self._rows_checked = len(packed)
+            del since
         # A row stamped before one ahead of it holds from that one's sample (`_step_column`).
         at = packed[:, 0] if self._rows_in_order else np.maximum.accumulate(packed[:, 0])
         first = max(int(np.searchsorted(at, start, side="right")) - 1, 0)
-        # Each row holds from its sample (the first: from `start`) to the next row's: the
-        # rows repeated that many times, one copy (a gather of each sample's row costs
-        # several times more).
+        # Each row holds from its sample (the first: from `start`) to the next row's.
         bounds = np.clip(at[first + 1 :].astype(np.intp) - start, 0, length)
-        held = np.repeat(packed[first:], np.diff(bounds, prepend=0, append=length), axis=0)
-        del packed, at  # the table is exported while a view lives: it could not grow
-        return held
+        counts = np.diff(bounds, prepend=0, append=length)
+        rows = packed[first:]
+        columns = {
+            name: np.repeat(_vehicle_column(name, rows, first_row), counts) for name in names
+        }
+        del packed, at, rows  # the table is exported while a view of it lives: no growth
+        return columns
 
     def _fault(self, k: int, kind: str) -> None:
         if kind not in self._faults:
