@@ -1,0 +1,50 @@
+"""What the `aeroexec` process itself sets up before a command runs."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+THREADS_AFTER_NUMPY = """\
+import os, sys
+from aeroexec.cli import main
+sys.argv = ["aeroexec", "--help"]
+try:
+    main()
+except SystemExit:
+    pass
+import numpy
+print(len(os.listdir("/proc/self/task")), os.environ.get("OPENBLAS_NUM_THREADS"))
+"""
+
+
+def _threads(blas_threads: str | None) -> tuple[int, str]:
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if blas_threads is not None:
+        env["OPENBLAS_NUM_THREADS"] = blas_threads
+    proc = subprocess.run(
+        [sys.executable, "-c", THREADS_AFTER_NUMPY],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
+    assert proc.returncode == 0, proc.stderr
+    threads, value = proc.stdout.split()[-2:]
+    return int(threads), value
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="threads counted in /proc")
+def test_numpy_gets_one_blas_thread_unless_the_user_says_otherwise() -> None:
+    # OpenBLAS starts a thread per core at numpy's import, spinning a while: CPU for
+    # matrix routines aeroexec never calls (benchmarks/properties.py, whole process).
+    ours, value = _threads(None)
+    theirs, kept = _threads("3")
+    assert value == "1"
+    assert kept == "3"
+    assert ours == 1  # the main thread alone
+    if (os.cpu_count() or 1) > 1:  # OpenBLAS starts no more threads than there are cores
+        assert theirs > 1
