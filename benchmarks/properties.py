@@ -16,6 +16,11 @@
     it comes). Target: the monitor's extra CPU <= 10 % of the run, 1.1x.
 (c) Identical: the monitor's verdicts against `check` on the recording of the same run
     (status, robustness, first violating interval of every property). Target: identical.
+(d) Where a user feels it: the whole `aeroexec run --spec` process against `aeroexec run`
+    (the 10-minute patrol, the 20 properties; CPU of each child process, bytecode cached
+    as an installed tool has it). What a monitor costs there beyond (b) is starting it:
+    importing numpy, which the unmonitored run never does (its own line: `import numpy`
+    against an empty interpreter), the property modules, reading the property files.
 
 Medians of --repeat interleaved rounds of CPU time (benchmarks/figures.py).
 
@@ -26,15 +31,19 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
 import io
+import os
+import statistics
 import sys
 import tempfile
 from pathlib import Path
 
 import orjson
-from figures import Figure, interleaved, timed
+from figures import Figure, child_cpu, interleaved, timed
 from replay import MISSION, PATROLS, long_endurance_world, record_patrol
 
+from aeroexec.cli import BLAS_THREADS
 from aeroexec.mission.session import SessionConfig, simulate
 from aeroexec.properties.check import SERVICES, TOPICS, check_recording
 from aeroexec.properties.monitor import PropertyMonitor
@@ -73,15 +82,67 @@ FORMULAS = [
 ]
 
 
-def twenty() -> PropertySet:
+def spec_text() -> str:
+    """The 16 properties besides aeroexec:safety, as a property file."""
     lines = ["properties:"]
     for name, formula, action in FORMULAS:
         lines += [f"  - name: {name}", f"    formula: '{formula}'", "    severity: warning"]
         if action:
             lines.append(f"    action: {action}")
-    own = parse_properties("\n".join(lines) + "\n", "bench.yaml")
+    return "\n".join(lines) + "\n"
+
+
+def twenty() -> PropertySet:
+    own = parse_properties(spec_text(), "bench.yaml")
     safety = load_properties(["aeroexec:safety"]).properties
     return PropertySet((*safety, *own), ("aeroexec:safety", "bench.yaml"))
+
+
+def whole_process(mission: Path, world: Path, directory: Path, repeat: int) -> list[Figure]:
+    """(d): child processes, interleaved; bytecode written and read as an installed
+    tool's is (this machine's PYTHONDONTWRITEBYTECODE would compile every module anew)."""
+    spec = directory / "bench.yaml"
+    spec.write_text(spec_text(), encoding="utf-8")
+    os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+    run = [sys.executable, "-m", "aeroexec", "run", "-w", str(world), "-q"]
+    plain = [*run, str(mission)]
+    monitored = [*run, "--spec", "aeroexec:safety", "--spec", str(spec), str(mission)]
+    # As `aeroexec` imports it: with one BLAS thread (aeroexec.cli.BLAS_THREADS).
+    one_thread = f"import os; os.environ.setdefault{BLAS_THREADS!r}"
+    numpy = [sys.executable, "-c", f"{one_thread}; import numpy"]
+    empty = [sys.executable, "-c", one_thread]
+    commands = {"plain": plain, "monitored": monitored, "numpy": numpy, "empty": empty}
+    if importlib.util.find_spec("rtamt") is not None:  # the issue's anchor, for scale
+        commands["rtamt"] = [sys.executable, "-c", f"{one_thread}; import rtamt"]
+    for command in commands.values():  # the bytecode caches
+        child_cpu(command)
+    samples: dict[str, list[float]] = {name: [] for name in commands}
+    for _ in range(repeat):
+        for name, command in commands.items():
+            samples[name].append(child_cpu(command))
+    cpu = {name: statistics.median(values) for name, values in samples.items()}
+    if "rtamt" in cpu:
+        floor = cpu["plain"] + cpu["rtamt"] - cpu["empty"]
+        print(
+            f"(for scale: RTAMT's import alone would make the run {floor * 1000:.1f} ms, "
+            f"{floor / cpu['plain']:.2f}x: any STL library is imported before it monitors)"
+        )
+    return [
+        Figure(
+            "(d) whole process: aeroexec run --spec (20 properties), 10-min patrol",
+            cpu["monitored"],
+            cpu["plain"],
+            "aeroexec run",
+            1.1,
+        ),
+        Figure(
+            "    floor: the unmonitored run plus importing numpy, which it never does",
+            cpu["plain"] + cpu["numpy"] - cpu["empty"],
+            cpu["plain"],
+            "aeroexec run",
+            1.1,
+        ),
+    ]
 
 
 def read_channels(path: Path) -> None:
@@ -175,6 +236,7 @@ def main() -> int:
         key = [(v.name, v.status, v.robustness, v.interval_s) for v in monitor.verdicts]
         again = check_recording(recording, props).verdicts
         same = key == [(v.name, v.status, v.robustness, v.interval_s) for v in again]
+        figures += whole_process(mission, world, directory, args.repeat)
     ok = True
     for figure in figures:
         print(figure.line())
