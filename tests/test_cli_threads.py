@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 
 import pytest
+from thread_count import threads_with
 
 THREADS_AFTER_NUMPY = """\
 import os, sys
@@ -22,19 +21,7 @@ print(len(os.listdir("/proc/self/task")), os.environ.get("OPENBLAS_NUM_THREADS")
 
 
 def _threads(blas_threads: str | None) -> tuple[int, str]:
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
-    if blas_threads is not None:
-        env["OPENBLAS_NUM_THREADS"] = blas_threads
-    proc = subprocess.run(
-        [sys.executable, "-c", THREADS_AFTER_NUMPY],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        env=env,
-    )
-    assert proc.returncode == 0, proc.stderr
-    threads, value = proc.stdout.split()[-2:]
-    return int(threads), value
+    return threads_with(THREADS_AFTER_NUMPY, "OPENBLAS_NUM_THREADS", blas_threads)
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="threads counted in /proc")

@@ -30,6 +30,7 @@ import pytest
 from foxglove_client import FoxgloveClient
 from live_helpers import AeroexecProcess, free_tcp_port, free_udp_port, mavsim_thread, write_mission
 from test_view import read_rrd
+from thread_count import threads_with
 
 from aeroexec.mission.paths import APPENDIX_C
 from aeroexec.recording import open_recording
@@ -460,19 +461,7 @@ view.close()
 
 
 def _live_view_threads(tokio_workers: str | None) -> tuple[int, str]:
-    env = {k: v for k, v in os.environ.items() if k != "TOKIO_WORKER_THREADS"}
-    if tokio_workers is not None:
-        env["TOKIO_WORKER_THREADS"] = tokio_workers
-    proc = subprocess.run(
-        [sys.executable, "-c", THREADS_OF_A_LIVE_VIEW],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        env=env,
-    )
-    assert proc.returncode == 0, proc.stderr
-    threads, left = proc.stdout.split()
-    return int(threads), left
+    return threads_with(THREADS_OF_A_LIVE_VIEW, "TOKIO_WORKER_THREADS", tokio_workers)
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="threads counted in /proc")
