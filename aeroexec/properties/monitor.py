@@ -292,8 +292,10 @@ class PropertyMonitor:
         names = {prop.name for prop in props}
         self._by_row = [entry for entry in self._by_row if entry[0].name not in names]
         self._state_tests = [e for e in self._state_tests if e[0].name not in names]
+        # Judged by row only once the first state (home) is known: it still is.
         first = self._builder.home_row
-        self._state_holds = self._all_hold(first) if first is not None else None
+        assert first is not None
+        self._state_holds = self._all_hold(first)
         for name in names:
             self._judged[name] = tick - 1
         self._group()
